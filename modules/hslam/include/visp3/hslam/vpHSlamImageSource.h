@@ -1,0 +1,112 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file vpHSlamImageSource.h
+  \brief Abstract source of timestamped grey images: datasets, videos and live cameras behind one interface.
+*/
+#ifndef VP_HSLAM_IMAGE_SOURCE_H
+#define VP_HSLAM_IMAGE_SOURCE_H
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/core/vpImage.h>
+#include <visp3/hslam/vpHSlamCamera.h>
+#include <visp3/hslam/vpHSlamPhotometricCalibration.h>
+
+#include <memory>
+#include <string>
+
+/*!
+  \class vpHSlamImageSource
+  \ingroup group_hslam
+  \brief Where frames come from: one interface for every dataset format, image folders, videos and V4L2 cameras.
+
+  What it is for: the same vpHSlam system is fed by all sources, so a program written for a dataset runs on a
+  live camera by changing the source only. A source yields frames strictly in order, each with a timestamp in
+  seconds (strictly increasing) and, where the format has it, an exposure time. It also reports the camera
+  calibration (model + rectification target) and the photometric calibration, if any.
+
+  Readers never skip or shift a frame silently: an unreadable image, an unparsable line or inconsistent
+  timestamps raise vpHSlamException naming the file (and line).
+
+  Threading: a source is used from one thread at a time.
+
+  \code
+  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create("/data/MH_01_easy");
+  vpImage<unsigned char> I;
+  vpHSlamImageSource::Frame frame;
+  while (source->acquire(I, frame)) {
+    // frame.timestamp (s), frame.exposure (ms, <= 0 if unknown), frame.index
+  }
+  \endcode
+*/
+class VISP_EXPORT vpHSlamImageSource
+{
+public:
+  //! Per-frame metadata delivered with each image.
+  struct Frame {
+    unsigned int index = 0;  //!< 0-based position in the source (after the start offset)
+    double timestamp = 0.;   //!< seconds, strictly increasing within a source
+    double exposure = -1.;   //!< exposure time in milliseconds, <= 0 when unknown
+    std::string name;        //!< file name or other identifier of the frame (for messages)
+  };
+
+  //! Dataset and input formats that create() understands.
+  enum Format {
+    formatAuto,       //!< detect from the folder's content
+    formatEuroc,      //!< EuRoC / TUM-VI ASL: mav0/cam0/data.csv + data/ + sensor.yaml (or the cam0 folder)
+    formatTumMono,    //!< TUM monoVO: images/ or images.zip, times.txt, camera.txt [, pcalib.txt, vignette.png]
+    formatTumRgbd,    //!< TUM RGB-D: rgb.txt + camera.txt or camera.xml
+    formatKitti,      //!< KITTI odometry: image_0/, times.txt, calib.txt
+    formatImages,     //!< image folder or printf pattern, with a camera file and a frame rate
+    formatVideo,      //!< video file through vpVideoReader, with a camera file and a frame rate
+    formatV4l2        //!< live camera through vpV4l2Grabber ("/dev/videoN")
+  };
+
+  //! Options for create(); every field has a usable default.
+  struct Options {
+    Format format = formatAuto;  //!< explicit format, or detect
+    std::string cameraFile;      //!< camera file overriding the one found in the folder (any vpHSlamCamera::load format)
+    double frameRate = 30.;      //!< frames per second for formats without timestamps (images, video), Hz
+    unsigned int startFrame = 0; //!< first frame to deliver (0-based)
+    unsigned int maxFrames = 0;  //!< stop after this many frames (0 = all)
+    unsigned int width = 640;    //!< requested live image width, pixels (V4L2)
+    unsigned int height = 480;   //!< requested live image height, pixels (V4L2)
+  };
+
+  virtual ~vpHSlamImageSource();
+
+  /*!
+    Open the source at \e path (a folder, a file, a printf pattern such as "img/%06d.png" or "/dev/video0").
+    \exception vpHSlamException naming the path when it cannot be opened or its format is not recognised.
+  */
+  static std::unique_ptr<vpHSlamImageSource> create(const std::string &path, const Options &options = Options());
+  //! Format detected for \e path (formatAuto when nothing matches). Does not open images.
+  static Format detectFormat(const std::string &path);
+  //! Name of a format as accepted on command lines: "auto", "euroc", "tum-mono", "tum-rgbd", "kitti", "images",
+  //! "video", "v4l2".
+  static std::string formatName(Format format);
+  //! Parse formatName()'s output. \exception vpHSlamException::invalidArgument on an unknown name.
+  static Format parseFormat(const std::string &name);
+
+  /*!
+    Next frame. \return false at the end of the sequence (no exception); true with I and frame filled otherwise.
+    \exception vpHSlamException on a corrupt or unreadable frame, or inconsistent metadata.
+  */
+  virtual bool acquire(vpImage<unsigned char> &I, Frame &frame) = 0;
+
+  //! Geometric calibration of the delivered (raw) images.
+  virtual const vpHSlamCamera &getCamera() const = 0;
+  //! Photometric calibration (empty when the format or folder has none).
+  virtual const vpHSlamPhotometricCalibration &getPhotometricCalibration() const = 0;
+  //! Number of frames that acquire() will deliver, or -1 when unknown (live, video without count).
+  virtual int getFrameCount() const = 0;
+  //! Nominal frame rate in Hz (from timestamps or options), 0 when unknown.
+  virtual double getFrameRate() const = 0;
+  //! Format of this source.
+  virtual Format getFormat() const = 0;
+  //! Human-readable description (format, path, frames, size).
+  virtual std::string describe() const = 0;
+};
+
+#endif
