@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# One entry point for a fresh Debian 12 machine (see README.md):
+#   bash cmake/run.sh demo   install what is missing, build, run the main job on data reachable by default
+#   bash cmake/run.sh test   install what is missing, build, run the test suite (benchmarks excluded)
+#   bash cmake/run.sh bench  install what is missing, build, run the benchmarks (ctest label "benchmark")
+# Environment: BUILD_DIR (default build), JOBS (default nproc), HSLAM_SKIP_INSTALL=1 to skip apt-get.
+set -euo pipefail
+
+cmd=${1:-}
+case "$cmd" in
+  demo | test | bench) ;;
+  *)
+    echo "usage: bash cmake/run.sh demo|test|bench" >&2
+    exit 2
+    ;;
+esac
+
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+build=${BUILD_DIR:-$repo/build}
+jobs=${JOBS:-$(nproc)}
+
+# Debian packages the build, the tests and the demo need. Installed only when missing.
+packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
+  libbenchmark-dev libv4l-dev visp-images-data)
+
+if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
+  missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if [ ${#missing[@]} -gt 0 ]; then
+    echo "== installing missing Debian packages: ${missing[*]}"
+    sudo_cmd=()
+    [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
+    "${sudo_cmd[@]}" apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+  fi
+fi
+
+echo "== configuring and building in $build"
+cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release >"$build.configure.log" 2>&1 || {
+  cat "$build.configure.log"
+  exit 1
+}
+cmake --build "$build" -j "$jobs"
+
+case "$cmd" in
+  test)
+    echo "== running the tests"
+    ctest --test-dir "$build" -LE benchmark --output-on-failure -j "$jobs"
+    ;;
+  bench)
+    echo "== running the benchmarks (machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-))"
+    ctest --test-dir "$build" -L benchmark -V
+    ;;
+  demo)
+    out=${HSLAM_DEMO_DIR:-$build/demo}
+    mkdir -p "$out"
+    # The main job on data every machine has: a synthetic room rendered from ViSP's image data, with exact
+    # ground truth, read back through the same dataset reader and rectifier a real sequence goes through.
+    echo "== rendering a synthetic sequence into $out/synthetic"
+    "$build/tutorials/tutorial-hslam-synthetic" --output "$out/synthetic" --frames 120
+    echo "== running the dataset program on it"
+    "$build/tutorials/tutorial-hslam-dataset" --input "$out/synthetic" --no-display
+    ;;
+esac
