@@ -26,18 +26,26 @@
   hasResponse() / hasVignette() say what is known and getStatus() gives a one-line description for the caller to
   report once.
 
-  Files:
-  - `pcalib.txt`: 256 whitespace-separated values, G(0) ... G(255), non-decreasing. They are rescaled so that
-    G(0) = 0 and G(255) = 255 (DSO convention) so irradiance stays in intensity units.
-  - vignette: an 8- or 16-bit grey PNG of the input image size; values are divided by their maximum so V is in
-    (0, 1].
+  Files (TUM monoVO layout, read the way DSO's PhotometricUndistorter reads them):
+  - `pcalib.txt`: exactly 256 whitespace-separated values G(0) ... G(255) (one line or several), finite and
+    non-decreasing, with G(255) > G(0). They are rescaled affinely so that G(0) = 0 and G(255) = 255 (DSO
+    convention), so irradiance stays in intensity units. DSO requires strictly increasing values; flat steps are
+    accepted here because they are harmless for a lookup table.
+  - vignette: an 8- or 16-bit grey PNG (or PGM) of the input image size, read at its full bit depth; values are
+    divided by their maximum so V is in (0, 1]. Every pixel must be > 0 (1/V is precomputed).
   - exposure: per frame, from the image source (milliseconds in TUM monoVO's times.txt); any positive unit works
-    as long as it is consistent within a sequence. A non-positive or unknown exposure means "use 1".
+    as long as it is consistent within a sequence. A non-positive, non-finite or unknown exposure means "use 1".
+    Unlike DSO, which keeps t aside and folds it into its affine brightness term, toIrradiance() divides by t
+    directly, so two frames of one scene give the same B whatever their exposures.
 
-  Malformed files (wrong count, non-monotonic G, wrong vignette size, non-positive vignette) raise
-  vpHSlamException naming the file and the problem.
+  Malformed files raise vpHSlamException naming the file and the problem: fileNotFound (missing),
+  fileUnreadable (cannot be opened or decoded), parseError (a token of pcalib.txt is not a number, with its line),
+  invalidCalibration (wrong count with the count found, NaN/infinite value, decreasing or constant G, wrong
+  vignette size, zero/negative/NaN vignette pixel), unsupported (vignette of another pixel type than 8/16-bit).
+  load() is all-or-nothing: on an exception the object keeps its previous calibration.
 
-  Threading: immutable after load; toIrradiance() is const and may run from several threads at once.
+  Threading and ownership: a value type (copyable, owns its tables). Immutable after load(); toIrradiance() is
+  const, allocates nothing once B has the right size, and may run from several threads at once.
 
   \code
   vpHSlamPhotometricCalibration calib;
@@ -56,15 +64,21 @@ public:
     Load a calibration. Either path may be empty (that part stays identity).
     \param responseFile : `pcalib.txt` path or empty.
     \param vignetteFile : vignette PNG path or empty.
-    \param width, height : expected vignette size (input image size, pixels).
-    \exception vpHSlamException::fileNotFound, fileUnreadable, parseError or invalidCalibration, naming the file.
+    \param width, height : expected vignette size (input image size, pixels); only used with a vignette.
+    \exception vpHSlamException::fileNotFound, fileUnreadable, parseError, invalidCalibration or unsupported,
+    naming the file; invalidArgument if a vignette is given with a zero width or height.
   */
-  void load(const std::string &responseFile, const std::string &vignetteFile, unsigned int width,
-            unsigned int height);
+  void load(const std::string &responseFile, const std::string &vignetteFile, unsigned int width, unsigned int height);
 
-  //! Set the inverse response directly (256 values, non-decreasing); rescaled as for files.
+  /*!
+    Set the inverse response directly (256 finite values, non-decreasing, G(255) > G(0)); rescaled as for files.
+    \exception vpHSlamException::invalidCalibration otherwise (the calibration is left unchanged).
+  */
   void setInverseResponse(const std::vector<double> &G);
-  //! Set the vignette directly (values > 0, any scale; normalised to a maximum of 1).
+  /*!
+    Set the vignette directly (non-empty, every value finite and > 0, any scale; normalised to a maximum of 1).
+    \exception vpHSlamException::invalidCalibration otherwise (the calibration is left unchanged).
+  */
   void setVignette(const vpImage<float> &V);
 
   bool hasResponse() const { return !m_G.empty(); }
@@ -88,8 +102,8 @@ public:
   std::string getStatus() const;
 
 private:
-  std::vector<float> m_G;  //!< inverse response, 256 values
-  vpImage<float> m_invV;   //!< 1 / vignette, precomputed
+  std::vector<float> m_G; //!< inverse response, 256 values
+  vpImage<float> m_invV;  //!< 1 / vignette, precomputed
   std::string m_responseFile, m_vignetteFile;
 };
 
