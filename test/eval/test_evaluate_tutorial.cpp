@@ -1,0 +1,137 @@
+// End to end: runs the built tutorial-hslam-evaluate and parses its key=value output.
+// The program is found relative to this test executable (<build>/test/ -> <build>/tutorials/).
+#include "HSlamTestData.h"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace
+{
+std::string tutorialPath()
+{
+  char self[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);
+  if (n <= 0) {
+    return std::string();
+  }
+  std::string dir(self, static_cast<size_t>(n));
+  dir = dir.substr(0, dir.find_last_of('/'));
+  const std::string path = dir + "/../tutorials/tutorial-hslam-evaluate";
+  return hslam_test::pathExists(path) ? path : std::string();
+}
+
+struct RunResult {
+  int exitCode = -1;
+  std::string output; // stdout and stderr
+};
+
+RunResult runTutorial(const std::string &arguments)
+{
+  RunResult result;
+  FILE *pipe = ::popen((tutorialPath() + " " + arguments + " 2>&1").c_str(), "r");
+  if (!pipe) {
+    return result;
+  }
+  char buffer[512];
+  while (std::fgets(buffer, sizeof(buffer), pipe)) {
+    result.output += buffer;
+  }
+  const int status = ::pclose(pipe);
+  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+//! Value of "key=<number>" at the start of an output line, NaN when absent.
+double valueOf(const std::string &output, const std::string &key)
+{
+  const std::string text = "\n" + output;
+  const size_t pos = text.find("\n" + key + "=");
+  if (pos == std::string::npos) {
+    return std::nan("");
+  }
+  return std::strtod(text.c_str() + pos + key.size() + 2, nullptr);
+}
+
+#define HSLAM_REQUIRE_TUTORIAL()                                                                                       \
+  if (tutorialPath().empty()) {                                                                                        \
+    GTEST_SKIP() << "tutorial-hslam-evaluate not built next to this test (configure with HSLAM_BUILD_TUTORIALS=ON)";   \
+  }
+} // namespace
+
+TEST(EvaluateTutorial, ReproducesReferenceAte)
+{
+  HSLAM_REQUIRE_TUTORIAL();
+  HSLAM_REQUIRE_SHARED_DATA(estimatePath, "ate_reference/MH_04_estimate.txt");
+  HSLAM_REQUIRE_SHARED_DATA(groundTruthPath, "ate_reference/MH_04_groundtruth.txt");
+  const std::string plot = ::testing::TempDir() + "/hslam_evaluate_" + std::to_string(::getpid()) + ".png";
+  const RunResult sim3 = runTutorial("--groundtruth " + groundTruthPath + " --estimate " + estimatePath +
+                                     " --align sim3 --max-dt 0.02 --plot " + plot);
+  ASSERT_EQ(sim3.exitCode, 0) << sim3.output;
+  EXPECT_NEAR(valueOf(sim3.output, "ate_rmse_m"), 0.0869, 1e-4) << sim3.output;
+  EXPECT_NEAR(valueOf(sim3.output, "scale"), 0.9934, 1e-4) << sim3.output;
+  EXPECT_EQ(valueOf(sim3.output, "matched"), 187.) << sim3.output;
+  EXPECT_GT(valueOf(sim3.output, "rpe_trans_rmse_m"), 0.) << sim3.output;
+  std::ifstream png(plot, std::ios::binary | std::ios::ate);
+  EXPECT_GT(png.tellg(), 1000) << "plot not written: " << plot;
+  std::remove(plot.c_str());
+
+  const RunResult se3 =
+      runTutorial("--groundtruth " + groundTruthPath + " --estimate " + estimatePath + " --align se3");
+  ASSERT_EQ(se3.exitCode, 0) << se3.output;
+  EXPECT_NEAR(valueOf(se3.output, "ate_rmse_m"), 0.1030, 1e-4) << se3.output;
+}
+
+TEST(EvaluateTutorial, BadInputExitsNonZeroWithMessage)
+{
+  HSLAM_REQUIRE_TUTORIAL();
+  const std::string dir = ::testing::TempDir();
+  const std::string good = dir + "/hslam_eval_good_" + std::to_string(::getpid()) + ".txt";
+  const std::string bad = dir + "/hslam_eval_bad_" + std::to_string(::getpid()) + ".txt";
+  {
+    std::ofstream g(good);
+    for (int i = 0; i < 10; ++i) {
+      g << i * 0.1 << " " << i << " " << i * i << " 0 0 0 0 1\n";
+    }
+    std::ofstream b(bad);
+    b << "0 0 0 0 0 0 0 1\n0.1 0 0 0 0 0 0 2\n";
+  }
+  const RunResult self = runTutorial("--groundtruth " + good + " --estimate " + good + " --align se3");
+  ASSERT_EQ(self.exitCode, 0) << self.output;
+  EXPECT_NEAR(valueOf(self.output, "ate_rmse_m"), 0., 1e-9) << self.output;
+
+  const RunResult quaternion = runTutorial("--groundtruth " + good + " --estimate " + bad);
+  EXPECT_NE(quaternion.exitCode, 0);
+  EXPECT_NE(quaternion.output.find(bad + ":2:"), std::string::npos) << quaternion.output;
+
+  const RunResult missing = runTutorial("--groundtruth " + good + " --estimate " + dir + "/no_such_file.txt");
+  EXPECT_NE(missing.exitCode, 0);
+  EXPECT_NE(missing.output.find("no_such_file.txt"), std::string::npos) << missing.output;
+
+  const RunResult option = runTutorial("--groundtruth " + good + " --estimate " + good + " --align affine");
+  EXPECT_NE(option.exitCode, 0);
+  EXPECT_NE(option.output.find("affine"), std::string::npos) << option.output;
+
+  const RunResult usage = runTutorial("--estimate " + good);
+  EXPECT_NE(usage.exitCode, 0);
+  EXPECT_NE(usage.output.find("--groundtruth"), std::string::npos) << usage.output;
+
+  // Timestamps that never meet (e.g. another clock): a clear error naming the cause, not a crash.
+  const std::string far = dir + "/hslam_eval_far_" + std::to_string(::getpid()) + ".txt";
+  {
+    std::ofstream f(far);
+    for (int i = 0; i < 10; ++i) {
+      f << 1000. + i * 0.1 << " " << i << " 0 0 0 0 0 1\n";
+    }
+  }
+  const RunResult apart = runTutorial("--groundtruth " + good + " --estimate " + far);
+  EXPECT_NE(apart.exitCode, 0);
+  EXPECT_NE(apart.output.find("0 of 10"), std::string::npos) << apart.output;
+  std::remove(far.c_str());
+  std::remove(good.c_str());
+  std::remove(bad.c_str());
+}
