@@ -22,12 +22,19 @@
   \brief Where frames come from: one interface for every dataset format, image folders, videos and V4L2 cameras.
 
   What it is for: the same vpHSlam system is fed by all sources, so a program written for a dataset runs on a
-  live camera by changing the source only. A source yields frames strictly in order, each with a timestamp in
-  seconds (strictly increasing) and, where the format has it, an exposure time. It also reports the camera
-  calibration (model + rectification target) and the photometric calibration, if any.
+  live camera by changing the source only. A source yields 8-bit grey frames (colour files are converted by ViSP's
+  readers) strictly in order, each with a timestamp in seconds (strictly increasing) and, where the format has it,
+  an exposure time. It also reports the camera calibration (model + rectification target) of the RAW images it
+  delivers and the photometric calibration, if any.
 
-  Readers never skip or shift a frame silently: an unreadable image, an unparsable line or inconsistent
-  timestamps raise vpHSlamException naming the file (and line).
+  Readers never skip or shift a frame silently: a missing, unreadable or corrupt image, an unparsable line,
+  non-increasing timestamps, a list and a folder of different lengths, or an image whose size differs from the
+  calibration raise vpHSlamException naming the file (and line). Lists are checked when the source is created
+  (missing files included), image contents when acquire() reads them. The end of a sequence is not an error:
+  acquire() returns false.
+
+  Dataset images are read one by one with vpImageIo, never through vpVideoReader, which silently skips unreadable
+  frames; vpVideoReader serves video files only.
 
   Threading: a source is used from one thread at a time.
 
@@ -45,30 +52,31 @@ class VISP_EXPORT vpHSlamImageSource
 public:
   //! Per-frame metadata delivered with each image.
   struct Frame {
-    unsigned int index = 0;  //!< 0-based position in the source (after the start offset)
-    double timestamp = 0.;   //!< seconds, strictly increasing within a source
-    double exposure = -1.;   //!< exposure time in milliseconds, <= 0 when unknown
-    std::string name;        //!< file name or other identifier of the frame (for messages)
+    unsigned int index = 0; //!< 0 for the first DELIVERED frame, whatever Options::startFrame, then +1
+    double timestamp = 0.;  //!< seconds, strictly increasing within a source
+    double exposure = -1.;  //!< exposure time in milliseconds, <= 0 when unknown
+    std::string name;       //!< image file path, or another identifier of the frame (for messages)
   };
 
   //! Dataset and input formats that create() understands.
   enum Format {
-    formatAuto,       //!< detect from the folder's content
-    formatEuroc,      //!< EuRoC / TUM-VI ASL: mav0/cam0/data.csv + data/ + sensor.yaml (or the cam0 folder)
-    formatTumMono,    //!< TUM monoVO: images/ or images.zip, times.txt, camera.txt [, pcalib.txt, vignette.png]
-    formatTumRgbd,    //!< TUM RGB-D: rgb.txt + camera.txt or camera.xml
-    formatKitti,      //!< KITTI odometry: image_0/, times.txt, calib.txt
-    formatImages,     //!< image folder or printf pattern, with a camera file and a frame rate
-    formatVideo,      //!< video file through vpVideoReader, with a camera file and a frame rate
-    formatV4l2        //!< live camera through vpV4l2Grabber ("/dev/videoN")
+    formatAuto,    //!< detect from the folder's content
+    formatEuroc,   //!< EuRoC / TUM-VI ASL: mav0/cam0/data.csv + data/ + sensor.yaml (or the cam0 folder)
+    formatTumMono, //!< TUM monoVO: images/, times.txt, camera.txt [, pcalib.txt, vignette.png]; images.zip alone
+                   //!< is refused (vpHSlamException::unsupported: unzip it into images/)
+    formatTumRgbd, //!< TUM RGB-D: rgb.txt + camera.txt or camera.xml in the folder, or Options::cameraFile
+    formatKitti,   //!< KITTI odometry: image_0/, times.txt, calib.txt (P0); size from the first image
+    formatImages,  //!< image folder (sorted by name) or printf pattern; camera file and frame rate required
+    formatVideo,   //!< video file through vpVideoReader, with a camera file and a frame rate
+    formatV4l2     //!< live camera through vpV4l2Grabber ("/dev/videoN")
   };
 
   //! Options for create(); every field has a usable default.
   struct Options {
-    Format format = formatAuto;  //!< explicit format, or detect
-    std::string cameraFile;      //!< camera file overriding the one found in the folder (any vpHSlamCamera::load format)
-    double frameRate = 30.;      //!< frames per second for formats without timestamps (images, video), Hz
-    unsigned int startFrame = 0; //!< first frame to deliver (0-based)
+    Format format = formatAuto; //!< explicit format, or detect
+    std::string cameraFile;     //!< camera file overriding the one found in the folder (any vpHSlamCamera::load format)
+    double frameRate = 30.;     //!< Hz, for formats without timestamps (images, video): frame i is at i / frameRate s
+    unsigned int startFrame = 0; //!< first frame to deliver (0-based in the sequence; timestamps are unchanged)
     unsigned int maxFrames = 0;  //!< stop after this many frames (0 = all)
     unsigned int width = 640;    //!< requested live image width, pixels (V4L2)
     unsigned int height = 480;   //!< requested live image height, pixels (V4L2)
@@ -78,10 +86,21 @@ public:
 
   /*!
     Open the source at \e path (a folder, a file, a printf pattern such as "img/%06d.png" or "/dev/video0").
-    \exception vpHSlamException naming the path when it cannot be opened or its format is not recognised.
+    The format is Options::format, or detectFormat()'s answer when that is formatAuto.
+    \exception vpHSlamException naming the path when it cannot be opened (fileNotFound, parseError, ...), its
+    format is not recognised (unsupported), or Options::startFrame is past the end (invalidArgument).
   */
-  static std::unique_ptr<vpHSlamImageSource> create(const std::string &path, const Options &options = Options());
-  //! Format detected for \e path (formatAuto when nothing matches). Does not open images.
+  static std::unique_ptr<vpHSlamImageSource> create(const std::string &path, const Options &options);
+  //! create() with default Options (an overload: a default argument of a nested type with member initializers
+  //! cannot be formed inside the enclosing class).
+  static std::unique_ptr<vpHSlamImageSource> create(const std::string &path);
+  /*!
+    Format detected for \e path (formatAuto when nothing matches); does not open images. In order: "/dev/video*"
+    is V4L2; a path with one %d-style conversion is an image pattern; a file with a video extension is a video; a
+    folder with mav0/cam0/data.csv (or cam0/data.csv, or data.csv + data/) is EuRoC; times.txt + image_0/ is
+    KITTI; times.txt + images/ or images.zip is TUM monoVO; rgb.txt is TUM RGB-D; any image file makes an image
+    folder.
+  */
   static Format detectFormat(const std::string &path);
   //! Name of a format as accepted on command lines: "auto", "euroc", "tum-mono", "tum-rgbd", "kitti", "images",
   //! "video", "v4l2".

@@ -1,0 +1,52 @@
+/*
+ * H-SLAM for ViSP.
+ */
+//! \file VideoSource.h  Video files through vpVideoReader.
+#ifndef HSLAM_IO_VIDEO_SOURCE_H
+#define HSLAM_IO_VIDEO_SOURCE_H
+
+#include <visp3/hslam/vpHSlamImageSource.h>
+#include <visp3/io/vpVideoReader.h>
+
+#include <string>
+
+namespace hslam
+{
+/*!
+  A video file (avi, mp4, ...) decoded by vpVideoReader (OpenCV). Frame i of the file is at i / frameRate
+  seconds, Options::frameRate in Hz. A camera file is required: Options::cameraFile, else camera.txt, camera.xml or
+  camera.yaml beside the video. A frame of another size than the calibration throws; the end of the stream (or a
+  frame the decoder cannot produce) ends the sequence.
+*/
+class VideoSource : public vpHSlamImageSource
+{
+public:
+  VideoSource(const std::string &path, const vpHSlamImageSource::Options &options);
+
+  bool acquire(vpImage<unsigned char> &I, Frame &frame) override;
+  const vpHSlamCamera &getCamera() const override { return m_camera; }
+  const vpHSlamPhotometricCalibration &getPhotometricCalibration() const override { return m_photometric; }
+  int getFrameCount() const override { return m_frameCount; }
+  double getFrameRate() const override { return m_frameRate; }
+  Format getFormat() const override { return formatVideo; }
+  std::string describe() const override;
+
+private:
+  //! Next decoded frame of the file, size-checked; false at the end of the stream.
+  bool decodeNext(vpImage<unsigned char> &I);
+
+  std::string m_path, m_cameraFile;
+  vpVideoReader m_reader;
+  vpHSlamCamera m_camera;
+  vpHSlamPhotometricCalibration m_photometric;
+  vpImage<unsigned char> m_first; //!< frame decoded by open() (for the size only)
+  bool m_ended = false;
+  int m_frameCount = -1;
+  unsigned int m_maxFrames = 0;
+  unsigned int m_delivered = 0;
+  unsigned int m_fileIndex = 0; //!< index in the file of the next frame
+  double m_frameRate = 0.;
+};
+} // namespace hslam
+
+#endif
