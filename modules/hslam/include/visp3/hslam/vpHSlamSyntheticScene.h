@@ -1,0 +1,160 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file vpHSlamSyntheticScene.h
+  \brief Synthetic image sequences of a textured room with exact ground truth.
+*/
+#ifndef VP_HSLAM_SYNTHETIC_SCENE_H
+#define VP_HSLAM_SYNTHETIC_SCENE_H
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpColVector.h>
+#include <visp3/core/vpConfig.h>
+#include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpImage.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hslam
+{
+class SyntheticRenderer;
+class SyntheticTrajectory;
+} // namespace hslam
+
+/*!
+  \class vpHSlamSyntheticScene
+  \ingroup group_hslam
+  \brief Renders a monocular sequence of a closed, textured room along a smooth closed camera loop, with exact
+  ground truth (poses, intrinsics, 3D point behind every pixel, photometric calibration).
+
+  What it is for: tests and demonstrations that need a sequence whose every number is known. The room (5 x 2.6 x
+  5.5 m, three boxes inside for parallax) is textured with real photographs from ViSP's image data (Debian
+  package visp-images-data, found through vpIoTools::getViSPImagesDataPath() or
+  /usr/share/visp-images-data/ViSP-images). Images are ray-cast with mip-mapped bilinear texture look-up and 2x2
+  supersampling. The camera follows a hand-held-like path (sums of sinusoids in position and in small rotations)
+  whose last frame has exactly the pose of the first, so loop closure can be tested; the motion between two
+  frames stays below 2 cm and 1 degree whatever the frame count (amplitudes shrink for short sequences).
+
+  Optional effects follow the TUM monoVO photometric model I = G(t V B): vignette V (written as vignette.png),
+  camera response G (its inverse written as pcalib.txt), smoothly changing exposure t (written in times.txt),
+  Gaussian noise in grey levels, and motion blur (mean of sub-frame renders over the exposure time, centred on
+  the frame's pose).
+
+  writeSequence() produces the TUM RGB-D layout used by the project's readers: rgb/NNNNNN.png (8-bit grey),
+  rgb.txt, groundtruth.txt (camera-to-world wMc, TUM format, timestamps index / fps), camera.txt (DSO format,
+  pinhole, absolute intrinsics), camera.xml (ViSP), times.txt (id, time in s, exposure in ms), and with the
+  photometric effects vignette.png (8-bit) and pcalib.txt. The output is deterministic: a given configuration and
+  seed give byte-identical files (std::mt19937 seeded explicitly, no time-dependent value).
+
+  Threading: configure() is not thread-safe; after it, all const methods may run concurrently. The object owns its
+  textures (a few tens of MB).
+
+  \code
+  vpHSlamSyntheticScene scene;
+  vpHSlamSyntheticScene::Effects effects;
+  effects.vignette = true;
+  scene.configure(640, 480, 300, 30.0, 42, effects);
+  vpImage<unsigned char> I;
+  scene.render(0, I);
+  vpHomogeneousMatrix wMc = scene.getPose(0);
+  scene.writeSequence("/tmp/synthetic");
+  \endcode
+*/
+class VISP_EXPORT vpHSlamSyntheticScene
+{
+public:
+  //! Photometric and image-formation effects; all off by default (irradiance written as is).
+  struct Effects {
+    // A constructor rather than member initialisers: the struct is a default argument of configure().
+    Effects() : vignette(false), response(false), exposureChanges(false), noiseSigma(0.0), motionBlur(false) {}
+    bool vignette;        //!< radial fall-off to 50 % in the corners, written as vignette.png
+    bool response;        //!< gamma-like camera response, its inverse written as pcalib.txt
+    bool exposureChanges; //!< exposure varies smoothly (x0.625 .. x1.6 of 10 ms), written in times.txt
+    double noiseSigma;    //!< standard deviation of additive Gaussian noise, grey levels
+    bool motionBlur;      //!< average of sub-frame renders over the exposure time
+  };
+
+  //! Nothing rendered yet; call configure() before anything else.
+  vpHSlamSyntheticScene();
+  ~vpHSlamSyntheticScene();
+  vpHSlamSyntheticScene(const vpHSlamSyntheticScene &) = delete;
+  vpHSlamSyntheticScene &operator=(const vpHSlamSyntheticScene &) = delete;
+
+  /*!
+    Folder holding ViSP's image data ("ViSP-images"); empty (default) means vpIoTools::getViSPImagesDataPath(),
+    then /usr/share/visp-images-data/ViSP-images. Takes effect at the next configure().
+  */
+  void setImagesDataPath(const std::string &path) { m_imagesDataPath = path; }
+
+  /*!
+    Set up the scene, camera and trajectory (loads the textures on first call or when the path changed).
+    \param width, height : image size, pixels (>= 16 each). The focal length scales with the width (500 px at 640).
+    \param frames : frame count (>= 2); frame frames - 1 has the pose of frame 0.
+    \param fps : frame rate (> 0), for timestamps, exposure and motion blur.
+    \param seed : selects the trajectory's phases and the noise.
+    \param effects : photometric effects.
+    \exception vpHSlamException::invalidArgument for out-of-range values, vpHSlamException::fileNotFound naming the
+    folder when no texture photograph is found.
+  */
+  void configure(unsigned int width = 640, unsigned int height = 480, unsigned int frames = 300, double fps = 30.0,
+                 unsigned int seed = 1, const Effects &effects = Effects());
+
+  unsigned int getWidth() const { return m_width; }       //!< pixels
+  unsigned int getHeight() const { return m_height; }     //!< pixels
+  unsigned int getFrameCount() const { return m_frames; } //!< frames
+  double getFrameRate() const { return m_fps; }           //!< frames per second
+  const Effects &getEffects() const { return m_effects; }
+
+  //! Pinhole intrinsics of the rendered images (no distortion; (0,0) is the centre of the top-left pixel).
+  vpCameraParameters getCameraParameters() const;
+  //! Camera-to-world pose of frame i (world: x right, y down towards the floor, z forward; metres).
+  vpHomogeneousMatrix getPose(unsigned int i) const;
+  //! Timestamp of frame i, seconds (i / fps).
+  double getTimestamp(unsigned int i) const;
+  //! Exposure time of frame i, milliseconds.
+  double getExposure(unsigned int i) const;
+  //! The inverse response G^-1 as written to pcalib.txt (256 values, identity when the response is off).
+  std::vector<double> getInverseResponse() const;
+  //! The vignette as written to vignette.png, values in (0, 1] (all ones when the vignette is off).
+  void getVignette(vpImage<float> &V) const;
+
+  //! Render frame i (8-bit grey) with the configured effects.
+  void render(unsigned int i, vpImage<unsigned char> &I) const;
+
+  /*!
+    The 3D world point (metres) seen at pixel (u, v) of frame i (at the frame's pose; with motion blur, the
+    centre of the exposure).
+  */
+  vpColVector worldPointAt(double u, double v, unsigned int i) const;
+  //! Depth (metres, along the optical axis) of the surface seen at pixel (u, v) of frame i.
+  double depthAt(double u, double v, unsigned int i) const;
+
+  /*!
+    Render every frame and write the sequence into \e dir (created if needed); see the class documentation for
+    the files.
+    \exception vpHSlamException::invalidArgument naming the path when a folder or file cannot be written.
+  */
+  void writeSequence(const std::string &dir) const;
+
+  //! Photographs used as textures (for reports).
+  std::vector<std::string> getTextureFiles() const;
+
+private:
+  void requireConfigured(const char *what) const;
+  void requireFrame(unsigned int i, const char *what) const;
+  void renderIrradiance(unsigned int i, std::vector<float> &E) const;
+
+  std::string m_imagesDataPath, m_loadedPath;
+  unsigned int m_width, m_height, m_frames, m_seed;
+  double m_fps;
+  Effects m_effects;
+  std::unique_ptr<hslam::SyntheticRenderer> m_renderer;
+  std::unique_ptr<hslam::SyntheticTrajectory> m_trajectory;
+  std::vector<float> m_vignette; //!< per pixel, quantised to 8 bits as written (empty when off)
+  std::vector<double> m_inverseResponse;
+};
+
+#endif
