@@ -1,0 +1,152 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file vpHSlamParameters.h
+  \brief Every setting of the system, one struct per component, with defaults, YAML load/save and print.
+*/
+#ifndef VP_HSLAM_PARAMETERS_H
+#define VP_HSLAM_PARAMETERS_H
+
+#include <visp3/core/vpConfig.h>
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+/*!
+  \class vpHSlamParameters
+  \ingroup group_hslam
+  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, system), each
+  field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part) unless
+  noted.
+
+  What it is for: no threshold lives in algorithm code; everything a user may tune is here, can be written to and
+  read from YAML (cv::FileStorage format, one section per component), and printed. Fields absent from a YAML file
+  keep their defaults; unknown keys are an error (they are usually typos).
+
+  Threading: a value type; the system copies it at construction.
+
+  \code
+  vpHSlamParameters params;
+  params.load("data/hslam-default.yaml");   // optional
+  params.mapper.windowSize = 6;
+  params.print(std::cout);
+  params.save("used-settings.yaml");
+  \endcode
+*/
+class VISP_EXPORT vpHSlamParameters
+{
+public:
+  //! What the system keeps and optimises (ARCHITECTURE.md, "Modes").
+  enum Mode {
+    modeVoStrict, //!< window only, marginalised points discarded (DSO-like)
+    modeVoReuse,  //!< global points re-used, no loop closure
+    modeSlam      //!< everything (default once loop closure exists)
+  };
+
+  //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
+  struct Features {
+    int desiredPointDensity = 2000;     //!< target number of active points in the window (DSO)
+    int desiredImmatureDensity = 1500;  //!< candidates selected per new keyframe (DSO)
+    int selectionBlockSize = 32;        //!< side of the blocks of the region-adaptive gradient threshold, pixels
+    double gradientThresholdAdd = 7.;   //!< threshold = block median of |grad| + this, intensity units (DSO)
+    double gradientThresholdLevelFactor = 0.75; //!< threshold multiplier per coarser selection level (DSO)
+    int selectionLevels = 3;            //!< pyramid levels used for selection (DSO: 3 "potential" sizes)
+    int fastThreshold = 7;              //!< FAST intensity threshold (ARCHITECTURE.md)
+    int maxCorners = 1000;              //!< FAST corners kept per keyframe
+    double cornerMinDistance = 4.;      //!< non-maximum suppression radius between corners, pixels
+  };
+
+  //! Direct (and later joint) pose tracking against the newest keyframe.
+  struct Tracker {
+    int maxPyramidLevels = 6;           //!< upper bound on pyramid levels
+    int minCoarsestPixels = 5000;       //!< a level is added only while it keeps this many pixels (DSO)
+    double huberThreshold = 9.;         //!< Huber threshold on photometric residuals, intensity units (DSO)
+    double gradientWeightC = 50.;       //!< gradient weight c^2/(c^2+|g|^2), c in intensity units (DSO)
+    double outlierEnergyPerPixel = 144.; //!< residual^2 above which a pattern pixel is an outlier: 12^2 (DSO)
+    std::vector<int> iterationsPerLevel = {10, 20, 50, 50, 50}; //!< Gauss-Newton iterations, finest level first (DSO)
+    double retrackResidualFactor = 1.5; //!< try other motion hypotheses when the residual exceeds this times the last
+    double affinePriorA = 0.;           //!< prior weight on a (0 = free; DSO mode 1 without calibration)
+    double affinePriorB = 0.;           //!< prior weight on b (0 = free)
+    double affinePriorACalibrated = 1e12; //!< prior weight on a with photometric calibration (DSO: fixed)
+    double affinePriorBCalibrated = 1e8;  //!< prior weight on b with photometric calibration (DSO)
+    double maxShiftWeightT = 0.04;      //!< keyframe decision: translation flow weight, per (w+h) (DSO)
+    double maxShiftWeightR = 0.0;       //!< keyframe decision: rotation flow weight, per (w+h) (DSO)
+    double maxShiftWeightRT = 0.02;     //!< keyframe decision: rotation+translation flow weight, per (w+h) (DSO)
+    double maxAffineWeight = 2.;        //!< keyframe decision: brightness change weight (DSO)
+    double keyframeResidualFactor = 2.; //!< keyframe when the RMSE exceeds this times the keyframe's first RMSE
+    int maxFramesBetweenKeyframes = 0;  //!< force a keyframe after this many frames (0 = never)
+  };
+
+  //! Sliding-window photometric bundle adjustment, point management and marginalisation.
+  struct Mapper {
+    int windowSize = 7;                 //!< keyframes in the window (paper: 7)
+    int minWindowSize = 5;              //!< marginalisation keeps at least this many keyframes (DSO)
+    int maxOptimizationIterations = 6;  //!< LM iterations per new keyframe (DSO)
+    int minOptimizationIterations = 1;  //!< (DSO)
+    double initialLambda = 1e-5;        //!< LM damping start (DSO)
+    double stepConvergenceThreshold = 1e-5; //!< stop when the scaled update norm is below this
+    double minPointsFractionKept = 0.05; //!< marginalise a keyframe keeping fewer of its points (DSO: 5 %)
+    double maxAffineChangeMarginalize = 0.7; //!< marginalise when |a_ji| changes beyond this log-ratio (DSO)
+    double minIdepthHessianActivate = 100.; //!< inverse-depth Hessian needed to keep a new point (DSO)
+    double minIdepthHessianMarginalize = 50.; //!< below: drop a point instead of marginalising it (DSO)
+    double activationMinDistance = 2.;  //!< initial distance-map radius for activation, pixels (adapted, DSO)
+    double traceMinImprovementFactor = 2.; //!< DSO setting_trace_minImprovementFactor
+    double traceSlackInterval = 1.5;    //!< search interval slack, pixels (DSO)
+    double traceStepSize = 1.;          //!< epipolar search step, pixels (DSO)
+    int traceGaussNewtonIterations = 3; //!< sub-pixel refinement iterations (DSO)
+    double traceGaussNewtonThreshold = 0.1; //!< stop refinement below this step, pixels (DSO)
+    double traceExtraSlackOnThreshold = 1.2; //!< outlier threshold slack for tracing (DSO)
+    double minTraceQuality = 3.;        //!< quality (second best / best) required to activate (DSO)
+    double maxTraceInterval = 8.;       //!< pixel length of the interval below which a point may activate (DSO)
+    double outlierResidualFraction = 0.3; //!< a point with more than this fraction of outlier residuals is removed
+  };
+
+  //! Monocular initialisation (two-view from feature matches, then photometric refinement).
+  struct Initializer {
+    int minMatches = 80;                //!< ORB matches needed to attempt a two-view solution
+    double minParallaxDeg = 1.0;        //!< median triangulation angle required, degrees
+    double ransacThresholdPx = 1.0;     //!< RANSAC inlier threshold on the epipolar / homography error, pixels
+    double ransacConfidence = 0.999;    //!< RANSAC confidence
+    int maxFramesToInitialize = 60;     //!< give up and restart with a new first frame after this many, frames
+    double initialIdepth = 1.;          //!< scale: the median inverse depth of the first map is set to this, 1/m
+  };
+
+  //! System-wide behaviour.
+  struct System {
+    Mode mode = modeVoStrict;           //!< see Mode (odometry only until loop closure exists)
+    bool deterministic = false;         //!< map in the caller's thread: identical output run to run
+    int workerThreads = 0;              //!< threads for residual accumulation (0 = off, run in the caller)
+    bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
+  };
+
+  Features features;
+  Tracker tracker;
+  Mapper mapper;
+  Initializer initializer;
+  System system;
+
+  /*!
+    Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.
+    \exception vpHSlamException::fileNotFound, parseError (unknown key, wrong type), invalidArgument (value out of
+    range), naming the file and the key.
+  */
+  void load(const std::string &path);
+  //! Write every setting to a YAML file. \exception vpHSlamException::fileUnreadable when it cannot be written.
+  void save(const std::string &path) const;
+  //! Print every setting with its documentation line.
+  void print(std::ostream &os) const;
+  /*!
+    Check every value is in range.
+    \exception vpHSlamException::invalidArgument naming the field.
+  */
+  void validate() const;
+
+  //! "vo-strict", "vo-reuse", "slam".
+  static std::string modeName(Mode mode);
+  //! Inverse of modeName(). \exception vpHSlamException::invalidArgument on an unknown name.
+  static Mode parseMode(const std::string &name);
+};
+
+#endif

@@ -1,0 +1,103 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file ImagePyramid.h
+  \brief Image pyramid of a rectified frame with per-pixel intensity and gradients, as the direct part reads it.
+
+  Layout (DSO's "dI"): each level stores, per pixel, (I, dI/du, dI/dv) contiguously as Eigen::Vector3f so one
+  bilinear lookup gives the intensity and its gradient for the photometric Jacobians; a separate squared gradient
+  norm is kept for pixel selection. Intensities are irradiance (photometrically corrected) or raw 8-bit values
+  as floats when no calibration exists.
+
+  Pixel convention: centre of the top-left pixel is (0, 0) at every level. Level l halves level l-1 by averaging
+  2x2 blocks, so a level-0 coordinate x maps to (x + 0.5) / 2^l - 0.5 at level l, and the intrinsics follow:
+  f_l = f_0 / 2^l, c_l = (c_0 + 0.5) / 2^l - 0.5.
+
+  Ownership and threading: built once per frame by the tracking thread, then immutable and shared (read-only) by
+  mapping through std::shared_ptr. build() reuses its buffers when the size does not change.
+*/
+#ifndef HSLAM_FEATURES_IMAGE_PYRAMID_H
+#define HSLAM_FEATURES_IMAGE_PYRAMID_H
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/core/vpImage.h>
+
+#include <Eigen/Core>
+#include <Eigen/StdVector>
+
+#include <vector>
+
+namespace hslam
+{
+//! Pinhole intrinsics of one pyramid level, pixels.
+struct PinholeIntrinsics {
+  double fx = 1., fy = 1., cx = 0., cy = 0.;
+  //! Intrinsics of the level below (half resolution), following the pixel-centre convention above.
+  PinholeIntrinsics halved() const { return {fx * 0.5, fy * 0.5, (cx + 0.5) * 0.5 - 0.5, (cy + 0.5) * 0.5 - 0.5}; }
+};
+
+//! One level: (I, dI/du, dI/dv) per pixel, row-major, plus squared gradient norm.
+struct PyramidLevel {
+  int width = 0;
+  int height = 0;
+  PinholeIntrinsics K;
+  std::vector<Eigen::Vector3f, Eigen::aligned_allocator<Eigen::Vector3f>> color; //!< (I, dx, dy) per pixel
+  std::vector<float> gradSq;                                                       //!< dx^2 + dy^2 per pixel
+
+  //! True when (u, v) has room for bilinear interpolation and a border of \e margin pixels.
+  bool isInside(float u, float v, float margin) const
+  {
+    return u >= margin && v >= margin && u < static_cast<float>(width) - 1.f - margin &&
+           v < static_cast<float>(height) - 1.f - margin;
+  }
+
+  //! Bilinear (I, dx, dy) at (u, v); the caller guarantees isInside(u, v, 0).
+  Eigen::Vector3f interpolate(float u, float v) const
+  {
+    const int iu = static_cast<int>(u);
+    const int iv = static_cast<int>(v);
+    const float du = u - static_cast<float>(iu);
+    const float dv = v - static_cast<float>(iv);
+    const Eigen::Vector3f *p = &color[static_cast<size_t>(iv * width + iu)];
+    return (1.f - dv) * ((1.f - du) * p[0] + du * p[1]) + dv * ((1.f - du) * p[width] + du * p[width + 1]);
+  }
+
+  //! Bilinear intensity only.
+  float interpolateIntensity(float u, float v) const
+  {
+    const int iu = static_cast<int>(u);
+    const int iv = static_cast<int>(v);
+    const float du = u - static_cast<float>(iu);
+    const float dv = v - static_cast<float>(iv);
+    const Eigen::Vector3f *p = &color[static_cast<size_t>(iv * width + iu)];
+    return (1.f - dv) * ((1.f - du) * p[0][0] + du * p[1][0]) + dv * ((1.f - du) * p[width][0] + du * p[width + 1][0]);
+  }
+};
+
+/*!
+  Pyramid of a rectified frame. The number of levels is chosen so the coarsest level keeps at least
+  \e minCoarsestSize pixels on its shorter side (DSO: pyramid down to ~ 40-60 px), at most \e maxLevels.
+*/
+class VISP_EXPORT ImagePyramid
+{
+public:
+  /*!
+    Build from an intensity image (float, rectified) and the level-0 intrinsics.
+    \param I : intensities of the rectified frame (irradiance or 8-bit values as float).
+    \param K0 : level-0 pinhole intrinsics.
+    \param maxLevels : upper bound on the number of levels (>= 1).
+    \param minCoarsestSize : the coarsest level's shorter side stays >= this, pixels.
+  */
+  void build(const vpImage<float> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestSize);
+
+  int numLevels() const { return m_numLevels; }
+  const PyramidLevel &level(int l) const { return m_levels[static_cast<size_t>(l)]; }
+
+private:
+  std::vector<PyramidLevel> m_levels;
+  int m_numLevels = 0;
+};
+} // namespace hslam
+
+#endif

@@ -1,0 +1,48 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file MapPoint.h
+  \brief A map point in inverse-depth form: host keyframe, host pixel, inverse depth, its variance, patch, ORB.
+
+  One representation for the local and the global map (H-SLAM paper, sec. 3.3): while the point is ACTIVE it
+  keeps its 8-pixel patch and is optimised in the window; once MARGINALISED its patch is dropped but host,
+  pixel, inverse depth, variance and descriptor stay, so it can be re-activated later (early adoption / late
+  fusion, next issues).
+
+  Ownership: the mapper owns points (std::unique_ptr in the keyframe that hosts them); tracking reads copies of
+  what it needs (host pixel, inverse depth, patch) through the system's snapshot of the window.
+*/
+#ifndef HSLAM_MAP_MAP_POINT_H
+#define HSLAM_MAP_MAP_POINT_H
+
+#include "features/PatchPattern.h"
+
+#include <array>
+#include <cstdint>
+
+namespace hslam
+{
+//! Life cycle of a point.
+enum class PointStatus : uint8_t {
+  active,       //!< in the window, optimised by the photometric BA
+  marginalized, //!< left the window with its host; kept in the global map (no patch)
+  outlier       //!< removed (too many outlier residuals); kept only until memory is reclaimed
+};
+
+struct MapPoint {
+  int hostKeyframeId = -1; //!< keyframe whose image defines the pixel and the patch
+  float u = 0.f;           //!< host pixel, level 0, pixels
+  float v = 0.f;           //!< host pixel, level 0, pixels
+  double idepth = 0.;      //!< inverse depth in the host camera, 1/metres (up to the monocular scale)
+  double idepthVar = 0.;   //!< variance of idepth, from the window Hessian
+  PointStatus status = PointStatus::active;
+  bool isCorner = false;   //!< selected as a FAST corner (descriptor is reliable) rather than a gradient pixel
+  std::array<float, kPatternSize> patch{};       //!< host intensities of the pattern pixels (active only)
+  std::array<float, kPatternSize> patchWeight{}; //!< gradient-dependent weights c^2/(c^2+|g|^2) per pixel (DSO)
+  std::array<uint32_t, 8> orb{};                 //!< 256-bit ORB descriptor (filled by the features issue)
+  bool hasOrb = false;
+};
+} // namespace hslam
+
+#endif
