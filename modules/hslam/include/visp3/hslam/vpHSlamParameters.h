@@ -27,6 +27,10 @@
 
   Threading: a value type; the system copies it at construction.
 
+  Adding a setting: declare it at the end of its struct with a default and a doc comment, add its one row (range,
+  short doc) to the table of src/common/vpHSlamParameters.cpp, and regenerate data/hslam-default.yaml with
+  HSLAM_REGENERATE_DEFAULT_YAML=1 ctest -R DefaultYamlMatchesDefaults. test_parameters fails until all three agree.
+
   \code
   vpHSlamParameters params;
   params.load("data/hslam-default.yaml");   // optional
@@ -77,6 +81,7 @@ public:
     double maxAffineWeight = 2.;        //!< keyframe decision: brightness change weight (DSO)
     double keyframeResidualFactor = 2.; //!< keyframe when the RMSE exceeds this times the keyframe's first RMSE
     int maxFramesBetweenKeyframes = 0;  //!< force a keyframe after this many frames (0 = never)
+    double coarseCutoffResidual = 20.;  //!< coarse tracking: single-pixel residuals above this are saturated (DSO 20)
   };
 
   //! Sliding-window photometric bundle adjustment, point management and marginalisation.
@@ -101,6 +106,7 @@ public:
     double minTraceQuality = 3.;        //!< quality (second best / best) required to activate (DSO)
     double maxTraceInterval = 8.;       //!< pixel length of the interval below which a point may activate (DSO)
     double outlierResidualFraction = 0.3; //!< a point with more than this fraction of outlier residuals is removed
+    double traceMaxPixelSearch = 0.027; //!< longest epipolar segment searched, fraction of (width + height) (DSO)
   };
 
   //! Monocular initialisation (two-view from feature matches, then photometric refinement).
@@ -119,6 +125,7 @@ public:
     bool deterministic = false;         //!< map in the caller's thread: identical output run to run
     int workerThreads = 0;              //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
+    int maxTrackingFailures = 3;        //!< failed alignments in a row (pose predicted, DSO) before tracking is lost
   };
 
   Features features;
@@ -129,8 +136,14 @@ public:
 
   /*!
     Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.
-    \exception vpHSlamException::fileNotFound, parseError (unknown key, wrong type), invalidArgument (value out of
-    range), naming the file and the key.
+
+    Format (OpenCV FileStorage YAML, see data/hslam-default.yaml): line 1 is "%YAML:1.0"; one map per section
+    (features, tracker, mapper, initializer, system) whose keys are the member names; booleans are true/false,
+    the mode is its modeName(), vectors are [ 1, 2 ]. Comments go on their own line (OpenCV's reader keeps an
+    end-of-line comment inside an unquoted word). The whole file is checked before anything is assigned: on error
+    the object is unchanged.
+    \exception vpHSlamException::fileNotFound, parseError (unknown section or key, repeated key, wrong type,
+    malformed YAML), invalidArgument (value out of range), naming the file and the key.
   */
   void load(const std::string &path);
   //! Write every setting to a YAML file. \exception vpHSlamException::fileUnreadable when it cannot be written.
