@@ -1,0 +1,448 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "mapping/ImmaturePointTracer.h"
+
+#include "map/AffineBrightness.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace hslam
+{
+namespace
+{
+//! Border kept free around a new point, pixels: pattern padding plus one pixel of interpolation room (DSO).
+constexpr float kCreationBorder = static_cast<float>(kPatternPadding + 1);
+//! Projections closer than this to the target border end the point's life (DSO: 4 px, then out of bounds).
+constexpr float kTraceBorder = 4.f;
+//! Allowed depth ratio target/host at the near end of the interval (DSO: outside (0.75, 1.5) = out of bounds).
+constexpr float kMinScaleChange = 0.75f;
+constexpr float kMaxScaleChange = 1.5f;
+//! Expected matching error along the line, pixels: base + base * (gradient energy / energy along the line) (DSO).
+constexpr float kErrorInPixelBase = 0.2f;
+//! The expected error is capped to this many pixels (DSO).
+constexpr float kMaxErrorInPixel = 10.f;
+//! Size of the per-step error buffer; the discrete search never visits more positions (DSO: 100).
+constexpr int kMaxTraceSteps = 100;
+//! numSteps = floor(this + length / step): both end points are always visited (DSO).
+constexpr float kStepCountRounding = 1.9999f;
+//! Positions within this many steps of the best one do not count as a "second best" (DSO minTraceTestRadius).
+constexpr int kSecondBestExclusionRadius = 2;
+//! Quality is always refreshed when the search was longer than this many steps (DSO).
+constexpr int kQualityRefreshSteps = 10;
+//! Floor of the best energy in the quality ratio: a perfect match (energy 0) must not give 0 / 0.
+constexpr float kMinQualityDenominator = 1e-6f;
+//! Energy charged for a pattern pixel that falls outside the target image (DSO: 1e5 per missing pixel).
+constexpr float kOutOfImageEnergy = 1e5f;
+//! Energy before the first Gauss-Newton evaluation, so the first evaluation is always accepted (DSO).
+constexpr float kInitialGaussNewtonEnergy = 1e5f;
+//! Start of the "best energy" search, larger than any reachable energy.
+constexpr float kNoEnergy = 1e10f;
+//! Prior added to the 1-D Gauss-Newton Hessian (DSO: H starts at 1), keeps the step finite on flat patches.
+constexpr float kGaussNewtonHessianPrior = 1.f;
+//! Largest Gauss-Newton step along the line, in search steps (DSO).
+constexpr float kGaussNewtonMaxStep = 0.5f;
+//! Scale of the pseudo-random sub-step start offset: frac(uMin * this) (DSO), deterministic.
+constexpr float kStartJitterScale = 1000.f;
+//! Relative norm below which the epipolar direction is undefined (pixel at the epipole or no translation).
+constexpr float kMinRelativeDirectionNorm = 1e-6f;
+
+//! DSO's Huber energy of a residual: r^2 inside the threshold, 2 k |r| - k^2 outside (twice the usual Huber).
+inline float huberEnergy(float residual, float threshold, float &weight)
+{
+  const float absResidual = std::fabs(residual);
+  weight = absResidual < threshold ? 1.f : threshold / absResidual;
+  return weight * residual * residual * (2.f - weight);
+}
+
+//! Inverse depth that projects to target coordinate \e x along one image axis: x = (pr_a + Kt_a id) / (pr_z + Kt_z id).
+inline float idepthFromCoordinate(float x, float prAxis, float prZ, float KtAxis, float KtZ)
+{
+  return (prZ * x - prAxis) / (KtAxis - KtZ * x);
+}
+} // namespace
+
+void TraceStatistics::add(TraceStatus status)
+{
+  ++total;
+  switch (status) {
+  case TraceStatus::good:
+    ++good;
+    break;
+  case TraceStatus::outOfBounds:
+    ++outOfBounds;
+    break;
+  case TraceStatus::skipped:
+    ++skipped;
+    break;
+  case TraceStatus::badCondition:
+    ++badCondition;
+    break;
+  case TraceStatus::outlier:
+    ++outlier;
+    break;
+  case TraceStatus::uninitialized:
+    ++uninitialized;
+    break;
+  }
+}
+
+ImmaturePointTracer::ImmaturePointTracer(const vpHSlamParameters::Mapper &mapper,
+                                         const vpHSlamParameters::Tracker &tracker)
+    : m_huberThreshold(static_cast<float>(tracker.huberThreshold)),
+      m_gradientWeightCSq(static_cast<float>(tracker.gradientWeightC * tracker.gradientWeightC)),
+      m_outlierEnergyPerPixel(static_cast<float>(tracker.outlierEnergyPerPixel)),
+      m_minImprovementFactor(static_cast<float>(mapper.traceMinImprovementFactor)),
+      m_slackInterval(static_cast<float>(mapper.traceSlackInterval)),
+      m_stepSize(static_cast<float>(mapper.traceStepSize)), m_gaussNewtonIterations(mapper.traceGaussNewtonIterations),
+      m_gaussNewtonThreshold(static_cast<float>(mapper.traceGaussNewtonThreshold)),
+      m_extraSlackOnThreshold(static_cast<float>(mapper.traceExtraSlackOnThreshold)),
+      m_maxPixelSearchFraction(static_cast<float>(mapper.traceMaxPixelSearch))
+{
+  if (!(m_stepSize > 0.f) || !(m_maxPixelSearchFraction > 0.f) || m_gaussNewtonIterations < 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           std::string(__FILE__) + ":" + std::to_string(__LINE__) +
+                               ": traceStepSize and traceMaxPixelSearch must be > 0, traceGaussNewtonIterations >= 0");
+  }
+}
+
+bool ImmaturePointTracer::createImmaturePoint(const Frame &host, float u, float v, int selectionLevel,
+                                              ImmaturePoint &pt) const
+{
+  if (host.pyramid.numLevels() < 1) {
+    return false;
+  }
+  const PyramidLevel &level0 = host.pyramid.level(0);
+  if (!level0.isInside(u, v, kCreationBorder)) {
+    return false;
+  }
+  pt = ImmaturePoint();
+  pt.hostKeyframeId = host.keyframeId;
+  pt.u = u;
+  pt.v = v;
+  pt.selectionLevel = selectionLevel;
+  for (int k = 0; k < kPatternSize; ++k) {
+    const Eigen::Vector3f c =
+        level0.interpolate(u + static_cast<float>(kPattern[k][0]), v + static_cast<float>(kPattern[k][1]));
+    if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2])) {
+      return false;
+    }
+    pt.patch[static_cast<size_t>(k)] = c[0];
+    // DSO: gradient-dependent weight c^2 / (c^2 + |grad|^2), strong edges count less (they are less reliable).
+    pt.patchWeight[static_cast<size_t>(k)] = m_gradientWeightCSq / (m_gradientWeightCSq + c.tail<2>().squaredNorm());
+  }
+  // DSO: the point is an outlier in a frame when its summed pattern energy exceeds pattern size x outlier energy.
+  pt.energyThreshold = static_cast<float>(kPatternSize) * m_outlierEnergyPerPixel;
+  pt.idepthMin = 0.f;
+  pt.idepthMax = std::numeric_limits<float>::infinity();
+  pt.lastStatus = TraceStatus::uninitialized;
+  return true;
+}
+
+TraceContext ImmaturePointTracer::makeContext(const Frame &host, const Frame &target, const SE3d &targetMhost,
+                                              double aji, double bji, const PinholeIntrinsics &K0) const
+{
+  if (host.pyramid.numLevels() < 1 || target.pyramid.numLevels() < 1) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, std::string(__FILE__) + ":" + std::to_string(__LINE__) +
+                                                                  ": host or target frame has no image pyramid");
+  }
+  Eigen::Matrix3d K = Eigen::Matrix3d::Identity();
+  K(0, 0) = K0.fx;
+  K(1, 1) = K0.fy;
+  K(0, 2) = K0.cx;
+  K(1, 2) = K0.cy;
+  TraceContext context;
+  context.KRKi = (K * targetMhost.rotationMatrix() * K.inverse()).cast<float>();
+  context.Kt = (K * targetMhost.translation()).cast<float>();
+  context.aji = static_cast<float>(aji);
+  context.bji = static_cast<float>(bji);
+  context.hostLevel = &host.pyramid.level(0);
+  context.targetLevel = &target.pyramid.level(0);
+  context.maxPixelSearch =
+      m_maxPixelSearchFraction * static_cast<float>(context.targetLevel->width + context.targetLevel->height);
+  // The pattern is searched as it appears in the target: rotated (and scaled) by the in-plane part of K R K^-1.
+  const Eigen::Matrix2f Rplane = context.KRKi.topLeftCorner<2, 2>();
+  for (int k = 0; k < kPatternSize; ++k) {
+    context.rotatedPattern[static_cast<size_t>(k)] =
+        Rplane * Eigen::Vector2f(static_cast<float>(kPattern[k][0]), static_cast<float>(kPattern[k][1]));
+  }
+  return context;
+}
+
+TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const Frame &host, const Frame &target,
+                                       const SE3d &targetMhost, double aji, double bji, const PinholeIntrinsics &K0,
+                                       TraceResult *result) const
+{
+  const TraceContext context = makeContext(host, target, targetMhost, aji, bji, K0);
+  return trace(pt, context, result);
+}
+
+TraceStatistics ImmaturePointTracer::traceAll(std::vector<ImmaturePoint> &points, const Frame &host,
+                                              const Frame &target) const
+{
+  TraceStatistics statistics;
+  if (points.empty()) {
+    return statistics;
+  }
+  const SE3d targetMhost = target.cMw * host.cMw.inverse();
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(host.exposure, host.affine, target.exposure, target.affine, aji, bji);
+  const TraceContext context = makeContext(host, target, targetMhost, aji, bji, host.pyramid.level(0).K);
+  for (ImmaturePoint &pt : points) {
+    statistics.add(trace(pt, context));
+  }
+  return statistics;
+}
+
+float ImmaturePointTracer::projectedIntervalLength(const ImmaturePoint &pt, const SE3d &targetMhost,
+                                                   const PinholeIntrinsics &K0)
+{
+  if (!std::isfinite(pt.idepthMax) || !std::isfinite(pt.idepthMin)) {
+    return std::numeric_limits<float>::infinity();
+  }
+  const Eigen::Vector3d ray((pt.u - K0.cx) / K0.fx, (pt.v - K0.cy) / K0.fy, 1.);
+  const Eigen::Vector3d Rray = targetMhost.rotationMatrix() * ray;
+  const Eigen::Vector3d &t = targetMhost.translation();
+  const Eigen::Vector3d pMin = Rray + t * static_cast<double>(pt.idepthMin);
+  const Eigen::Vector3d pMax = Rray + t * static_cast<double>(pt.idepthMax);
+  if (!(pMin.z() > 0.) || !(pMax.z() > 0.)) {
+    return std::numeric_limits<float>::infinity();
+  }
+  const double du = K0.fx * (pMin.x() / pMin.z() - pMax.x() / pMax.z());
+  const double dv = K0.fy * (pMin.y() / pMin.z() - pMax.y() / pMax.z());
+  return static_cast<float>(std::sqrt(du * du + dv * dv));
+}
+
+TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &context, TraceResult *result) const
+{
+  TraceResult local;
+  TraceResult &out = result != nullptr ? *result : local;
+  out = TraceResult();
+  const auto finish = [&pt, &out](TraceStatus status, float u, float v, float pixelInterval) {
+    pt.lastStatus = status;
+    out.status = status;
+    out.u = u;
+    out.v = v;
+    out.pixelInterval = pixelInterval;
+    return status;
+  };
+  // An out-of-bounds point stays so: it has left the field of view for good (DSO).
+  if (pt.lastStatus == TraceStatus::outOfBounds) {
+    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+  }
+  const PyramidLevel &target = *context.targetLevel;
+  const Eigen::Vector3f &Kt = context.Kt;
+
+  // ---- Project both ends of the interval onto the target's epipolar line.
+  const Eigen::Vector3f pr = context.KRKi * Eigen::Vector3f(pt.u, pt.v, 1.f);
+  const Eigen::Vector3f ptpMin = pr + Kt * pt.idepthMin;
+  if (!(ptpMin.z() > 0.f)) {
+    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+  }
+  const float uMin = ptpMin.x() / ptpMin.z();
+  const float vMin = ptpMin.y() / ptpMin.z();
+  if (!target.isInside(uMin, vMin, kTraceBorder)) {
+    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+  }
+
+  const bool boundedInterval = std::isfinite(pt.idepthMax);
+  float dist = 0.f; // length of the segment to search, pixels
+  float dirU = 0.f, dirV = 0.f;
+  if (boundedInterval) {
+    const Eigen::Vector3f ptpMax = pr + Kt * pt.idepthMax;
+    if (!(ptpMax.z() > 0.f)) {
+      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    }
+    const float uMax = ptpMax.x() / ptpMax.z();
+    const float vMax = ptpMax.y() / ptpMax.z();
+    if (!target.isInside(uMax, vMax, kTraceBorder)) {
+      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    }
+    dist = std::hypot(uMax - uMin, vMax - vMin);
+    // Already certain to within the slack: nothing to gain from a search (DSO "skip").
+    if (dist < m_slackInterval) {
+      return finish(TraceStatus::skipped, 0.5f * (uMin + uMax), 0.5f * (vMin + vMax), dist);
+    }
+    dirU = (uMax - uMin) / dist;
+    dirV = (vMax - vMin) / dist;
+  } else {
+    // Direction of growing inverse depth: derivative of the projection, (Kt_xy - p_xy Kt_z) / z (exact tangent).
+    const float tu = Kt.x() - uMin * Kt.z();
+    const float tv = Kt.y() - vMin * Kt.z();
+    const float norm = std::hypot(tu, tv);
+    if (!(norm > kMinRelativeDirectionNorm * Kt.norm()) || !(norm > 0.f)) {
+      // No parallax direction (pure rotation or pixel at the epipole): keep the interval.
+      return finish(TraceStatus::skipped, uMin, vMin, 0.f);
+    }
+    dirU = tu / norm;
+    dirV = tv / norm;
+    dist = context.maxPixelSearch;
+    if (!target.isInside(uMin + dist * dirU, vMin + dist * dirV, kTraceBorder)) {
+      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    }
+  }
+
+  // Large depth changes distort the patch too much for the unwarped pattern comparison (DSO).
+  if (!(pt.idepthMin < 0.f || (ptpMin.z() > kMinScaleChange && ptpMin.z() < kMaxScaleChange))) {
+    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+  }
+
+  // ---- Expected pixel error: small when the host gradients lie along the epipolar line (DSO errorInPixel).
+  const PyramidLevel &hostLevel = *context.hostLevel;
+  Eigen::Matrix2f gradH = Eigen::Matrix2f::Zero();
+  for (int k = 0; k < kPatternSize; ++k) {
+    const Eigen::Vector3f c =
+        hostLevel.interpolate(pt.u + static_cast<float>(kPattern[k][0]), pt.v + static_cast<float>(kPattern[k][1]));
+    gradH += c.tail<2>() * c.tail<2>().transpose();
+  }
+  const Eigen::Vector2f along(dirU, dirV);
+  const Eigen::Vector2f across(dirV, -dirU);
+  const float energyAlong = along.dot(gradH * along);
+  const float energyAcross = across.dot(gradH * across);
+  float errorInPixel = kErrorInPixelBase + kErrorInPixelBase * (energyAlong + energyAcross) / energyAlong;
+  if (!std::isfinite(errorInPixel)) {
+    errorInPixel = std::numeric_limits<float>::infinity();
+  }
+  if (boundedInterval && errorInPixel * m_minImprovementFactor > dist) {
+    const float uEnd = uMin + dist * dirU, vEnd = vMin + dist * dirV;
+    return finish(TraceStatus::badCondition, 0.5f * (uMin + uEnd), 0.5f * (vMin + vEnd), dist);
+  }
+  errorInPixel = std::min(errorInPixel, kMaxErrorInPixel);
+
+  // ---- Discrete search along the segment, unweighted Huber SSD of the pattern (DSO).
+  dist = std::min(dist, context.maxPixelSearch);
+  const float stepU = m_stepSize * dirU;
+  const float stepV = m_stepSize * dirV;
+  int numSteps = static_cast<int>(kStepCountRounding + dist / m_stepSize);
+  numSteps = std::min(numSteps, kMaxTraceSteps - 1);
+  // Deterministic sub-step start offset, so consecutive traces do not sample the same positions (DSO).
+  const float startShift = uMin * kStartJitterScale - std::floor(uMin * kStartJitterScale);
+  float ptx = uMin - startShift * stepU;
+  float pty = vMin - startShift * stepV;
+
+  std::array<float, kPatternSize> reference;
+  for (int k = 0; k < kPatternSize; ++k) {
+    reference[static_cast<size_t>(k)] = context.aji * pt.patch[static_cast<size_t>(k)] + context.bji;
+  }
+  const std::array<Eigen::Vector2f, kPatternSize> &offsets = context.rotatedPattern;
+
+  std::array<float, kMaxTraceSteps> errors;
+  float bestU = 0.f, bestV = 0.f, bestEnergy = kNoEnergy;
+  int bestIndex = -1;
+  for (int i = 0; i < numSteps; ++i) {
+    float energy = 0.f;
+    for (int k = 0; k < kPatternSize; ++k) {
+      const float x = ptx + offsets[static_cast<size_t>(k)].x();
+      const float y = pty + offsets[static_cast<size_t>(k)].y();
+      if (!target.isInside(x, y, 0.f)) {
+        energy += kOutOfImageEnergy;
+        continue;
+      }
+      float weight;
+      energy +=
+          huberEnergy(target.interpolateIntensity(x, y) - reference[static_cast<size_t>(k)], m_huberThreshold, weight);
+    }
+    errors[static_cast<size_t>(i)] = energy;
+    if (energy < bestEnergy) {
+      bestU = ptx;
+      bestV = pty;
+      bestEnergy = energy;
+      bestIndex = i;
+    }
+    ptx += stepU;
+    pty += stepV;
+  }
+  out.searchSteps = numSteps;
+
+  // Quality: best energy away from the best match over the best energy (DSO: distinctiveness of the match).
+  float secondBest = kNoEnergy;
+  for (int i = 0; i < numSteps; ++i) {
+    if ((i < bestIndex - kSecondBestExclusionRadius || i > bestIndex + kSecondBestExclusionRadius) &&
+        errors[static_cast<size_t>(i)] < secondBest) {
+      secondBest = errors[static_cast<size_t>(i)];
+    }
+  }
+  const float newQuality = secondBest / std::max(bestEnergy, kMinQualityDenominator);
+  if (newQuality < pt.quality || numSteps > kQualityRefreshSteps) {
+    pt.quality = newQuality;
+  }
+
+  // ---- Gauss-Newton refinement along the line (1 unknown: the position in steps), gradient-weighted energy.
+  float uBackup = bestU, vBackup = bestV, stepBack = 0.f;
+  if (m_gaussNewtonIterations > 0) {
+    bestEnergy = kInitialGaussNewtonEnergy;
+  }
+  for (int it = 0; it < m_gaussNewtonIterations; ++it) {
+    float H = kGaussNewtonHessianPrior, b = 0.f, energy = 0.f;
+    for (int k = 0; k < kPatternSize; ++k) {
+      const float x = bestU + offsets[static_cast<size_t>(k)].x();
+      const float y = bestV + offsets[static_cast<size_t>(k)].y();
+      if (!target.isInside(x, y, 0.f)) {
+        energy += kOutOfImageEnergy;
+        continue;
+      }
+      const Eigen::Vector3f hit = target.interpolate(x, y);
+      const float residual = hit[0] - reference[static_cast<size_t>(k)];
+      const float dResidualdStep = stepU * hit[1] + stepV * hit[2];
+      float huberWeight;
+      const float e = huberEnergy(residual, m_huberThreshold, huberWeight);
+      H += huberWeight * dResidualdStep * dResidualdStep;
+      b += huberWeight * residual * dResidualdStep;
+      energy += pt.patchWeight[static_cast<size_t>(k)] * e;
+    }
+    if (energy > bestEnergy) {
+      // Worse than before: go back towards the previous position with half the step.
+      stepBack *= 0.5f;
+      bestU = uBackup + stepBack * stepU;
+      bestV = vBackup + stepBack * stepV;
+    } else {
+      float step = -b / H;
+      step = std::max(-kGaussNewtonMaxStep, std::min(kGaussNewtonMaxStep, step));
+      if (!std::isfinite(step)) {
+        step = 0.f;
+      }
+      uBackup = bestU;
+      vBackup = bestV;
+      stepBack = step;
+      bestU += step * stepU;
+      bestV += step * stepV;
+      bestEnergy = energy;
+    }
+    if (std::fabs(stepBack) < m_gaussNewtonThreshold) {
+      break;
+    }
+  }
+  out.bestEnergy = bestEnergy;
+
+  // ---- Energy-based outlier test; two outliers in a row end the point (DSO).
+  if (!(bestEnergy < pt.energyThreshold * m_extraSlackOnThreshold)) {
+    const TraceStatus status = pt.lastStatus == TraceStatus::outlier ? TraceStatus::outOfBounds : TraceStatus::outlier;
+    return finish(status, -1.f, -1.f, 0.f);
+  }
+
+  // ---- New interval: refined position +- the expected error, mapped back to inverse depth through the image
+  // axis along which the line runs faster (better conditioned division, DSO).
+  float idepthA, idepthB;
+  if (dirU * dirU > dirV * dirV) {
+    idepthA = idepthFromCoordinate(bestU - errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
+    idepthB = idepthFromCoordinate(bestU + errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
+  } else {
+    idepthA = idepthFromCoordinate(bestV - errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
+    idepthB = idepthFromCoordinate(bestV + errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
+  }
+  const float newMin = std::min(idepthA, idepthB);
+  const float newMax = std::max(idepthA, idepthB);
+  if (!std::isfinite(newMin) || !std::isfinite(newMax) || newMax < 0.f) {
+    return finish(TraceStatus::outlier, -1.f, -1.f, 0.f);
+  }
+  // Negative inverse depths lie "beyond infinity": clip, a visible point has idepth >= 0.
+  pt.idepthMin = std::max(newMin, 0.f);
+  pt.idepthMax = newMax;
+  return finish(TraceStatus::good, bestU, bestV, 2.f * errorInPixel);
+}
+} // namespace hslam
