@@ -43,7 +43,7 @@ struct PyramidLevel {
   int height = 0;
   PinholeIntrinsics K;
   std::vector<Eigen::Vector3f, Eigen::aligned_allocator<Eigen::Vector3f>> color; //!< (I, dx, dy) per pixel
-  std::vector<float> gradSq;                                                       //!< dx^2 + dy^2 per pixel
+  std::vector<float> gradSq;                                                     //!< dx^2 + dy^2 per pixel
 
   //! True when (u, v) has room for bilinear interpolation and a border of \e margin pixels.
   bool isInside(float u, float v, float margin) const
@@ -76,26 +76,50 @@ struct PyramidLevel {
 };
 
 /*!
-  Pyramid of a rectified frame. The number of levels is chosen so the coarsest level keeps at least
-  \e minCoarsestSize pixels on its shorter side (DSO: pyramid down to ~ 40-60 px), at most \e maxLevels.
+  Pyramid of a rectified frame.
+
+  Number of levels (DSO, setGlobalCalib): starting from level 0, a coarser level is added while the current
+  coarsest level has MORE than \e minCoarsestPixels pixels, up to \e maxLevels levels. With DSO's 5000 this gives
+  640x480 -> 4 levels (coarsest 80x60), 752x480 -> 5 (47x30), 1226x370 -> 5 (76x23).
+
+  Odd sizes: DSO requires every level size to be even; we accept any size and use floor division, so level l+1
+  has floor(w_l / 2) x floor(h_l / 2) pixels and drops the last column (row) of an odd-sized level. The retained
+  pixels keep the exact relation x_{l+1} = (x_l + 0.5) / 2 - 0.5, so PinholeIntrinsics::halved() stays exact.
+  A level must keep at least 2x2 pixels; no level is added below that.
+
+  Gradients: central differences (I[x+1] - I[x-1]) / 2 inside, one-sided differences I[1] - I[0] (resp.
+  I[w-1] - I[w-2]) on the first and last column (row), so a linear ramp has its exact slope everywhere.
 */
 class VISP_EXPORT ImagePyramid
 {
 public:
   /*!
-    Build from an intensity image (float, rectified) and the level-0 intrinsics.
+    Build from an intensity image (float, rectified) and the level-0 intrinsics. Buffers are reused: building
+    a pyramid of the same size again allocates nothing.
     \param I : intensities of the rectified frame (irradiance or 8-bit values as float).
     \param K0 : level-0 pinhole intrinsics.
     \param maxLevels : upper bound on the number of levels (>= 1).
-    \param minCoarsestSize : the coarsest level's shorter side stays >= this, pixels.
+    \param minCoarsestPixels : a coarser level is added only while the current coarsest level has more than this
+    many pixels (DSO: 5000, vpHSlamParameters::Tracker::minCoarsestPixels).
+    \exception vpHSlamException::invalidImage on an empty image, invalidArgument when maxLevels < 1.
   */
-  void build(const vpImage<float> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestSize);
+  void build(const vpImage<float> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestPixels);
+  //! Same from an 8-bit image (grey levels as floats), without an intermediate float image.
+  void build(const vpImage<unsigned char> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestPixels);
+
+  //! Number of levels DSO's rule gives for a width x height level 0 (see the class comment).
+  static int levelCount(int width, int height, int maxLevels, int minCoarsestPixels);
 
   int numLevels() const { return m_numLevels; }
   const PyramidLevel &level(int l) const { return m_levels[static_cast<size_t>(l)]; }
 
 private:
-  std::vector<PyramidLevel> m_levels;
+  template <typename T>
+  void buildFrom(const vpImage<T> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestPixels);
+  //! Sizes the levels (reusing their buffers), sets sizes and intrinsics.
+  void prepareLevels(int width, int height, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestPixels);
+
+  std::vector<PyramidLevel> m_levels; //!< never shrinks, so buffers survive a call with fewer levels
   int m_numLevels = 0;
 };
 } // namespace hslam
