@@ -1,0 +1,309 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*
+  WindowOptimizer, second half: keyframe marginalisation (DSO EnergyFunctional::marginalizePointsF and
+  marginalizeFrame, FullSystem::flagFramesForMarginalization) and the single-point inverse-depth optimisation used
+  by point activation (DSO FullSystem::optimizeImmaturePoint).
+*/
+#include "mapping/WindowOptimizer.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace hslam
+{
+namespace
+{
+//! DSO flagFramesForMarginalization: distance score 1 / (eps + d) keeps coincident keyframes finite.
+constexpr double kDistanceScoreEpsilon = 1e-5;
+//! DSO: the newest keyframe before the new one is never chosen by the distance score (setting_minFrameAge = 1),
+//! nor is the new one: the two newest are protected.
+constexpr int kProtectedNewestKeyframes = 2;
+//! DSO optimizeImmaturePoint: LM on one inverse depth, start damping 0.1, x0.5 after success, x5 after failure.
+constexpr double kPointInitialLambda = 0.1;
+constexpr double kPointLambdaAccept = 0.5;
+constexpr double kPointLambdaReject = 5.;
+//! Stop refining a new point when the inverse-depth step falls below this fraction of the inverse depth.
+constexpr double kPointRelativeStepConverged = 1e-4;
+//! A new point needs at least this many inlier residuals to be accepted.
+constexpr int kMinInlierResidualsActivate = 1;
+
+std::string where(int line)
+{
+  return std::string(__FILE__) + ":" + std::to_string(line) + ": ";
+}
+} // namespace
+
+void WindowOptimizer::remapAfterFrameRemoval(int removed)
+{
+  for (WindowPoint &p : m_points) {
+    if (p.host > removed) {
+      --p.host;
+    }
+    for (WindowResidual &r : p.residuals) {
+      if (r.target > removed) {
+        --r.target;
+      }
+    }
+  }
+}
+
+void WindowOptimizer::marginalizeKeyframe(int keyframeId)
+{
+  int idx = -1;
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    if (m_frames[i].kf->id() == keyframeId) {
+      idx = static_cast<int>(i);
+    }
+  }
+  if (idx < 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           where(__LINE__) + "keyframe " + std::to_string(keyframeId) + " is not in the window");
+  }
+  syncStatesAndPoints();
+  prepareContext();
+  const int n = static_cast<int>(m_frames.size());
+  const bool fixed = idx == gaugeFixedIndex();
+
+  // 1. The keyframe's points: linearise, keep those with a well-constrained inverse depth (DSO
+  //    setting_minIdepthH_marg), Schur-complement them into a frame system (DSO marginalizePointsF).
+  std::vector<int> hosted;
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    if (m_points[i].host == idx) {
+      hosted.push_back(static_cast<int>(i));
+    }
+  }
+  WindowAccumulator acc;
+  acc.reset(n);
+  linearizeRange(m_ctx, m_points, hosted, 0, hosted.size(), m_hxp.data(), acc);
+  std::vector<int> marg;
+  for (int pi : hosted) {
+    const WindowPoint &p = m_points[static_cast<size_t>(pi)];
+    if (p.inlierResiduals > 0 && p.Hpp >= m_mapper.minIdepthHessianMarginalize) {
+      marg.push_back(pi);
+    }
+  }
+  acc.reset(n);
+  linearizeRange(m_ctx, m_points, marg, 0, marg.size(), m_hxp.data(), acc);
+  schurRange(m_ctx, m_points, marg, 0, marg.size(), m_hxp.data(), 0., acc);
+  Eigen::MatrixXd Hm;
+  Eigen::VectorXd bm;
+  assembleFullSystem(acc, Hm, bm);
+  Hm -= acc.Hsc;
+  bm -= acc.bsc;
+  // DSO adds the keyframe's own (affine) prior to what is marginalised with it.
+  const int o = idx * kFrameDims;
+  Hm(o + 6, o + 6) += m_affinePriorA;
+  Hm(o + 7, o + 7) += m_affinePriorB;
+  bm[o + 6] += m_affinePriorA * m_states[static_cast<size_t>(idx)].a;
+  bm[o + 7] += m_affinePriorB * m_states[static_cast<size_t>(idx)].b;
+  if (!marg.empty()) {
+    m_prior.add(0.5 * (Hm + Hm.transpose()), bm, m_states);
+  }
+
+  // 2. Points leave the window: hosted ones become marginalised (kept for the global map with their last
+  //    inverse depth and variance); residuals of other points into the keyframe are dropped (DSO).
+  std::vector<char> remove(m_points.size(), 0);
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    WindowPoint &p = m_points[i];
+    if (p.host == idx) {
+      MapPoint &mp = m_frames[static_cast<size_t>(idx)].kf->points[static_cast<size_t>(p.pointIndex)];
+      mp.idepth = p.obs.idepth;
+      mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
+      mp.status = PointStatus::marginalized;
+      remove[i] = 1;
+      continue;
+    }
+    for (size_t r = 0; r < p.residuals.size(); ++r) {
+      if (p.residuals[r].target == idx) {
+        p.residuals.erase(p.residuals.begin() + static_cast<long>(r));
+        break;
+      }
+    }
+    if (p.residuals.empty()) {
+      // Observed by nothing that stays: it leaves the window with the keyframe (not into the prior).
+      MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
+      mp.status = PointStatus::marginalized;
+      remove[i] = 1;
+    }
+  }
+  removePointsIf(remove);
+
+  // 3. The keyframe's 8 states (DSO marginalizeFrame).
+  if (fixed) {
+    m_gaugeAnchor = m_states[static_cast<size_t>(idx)];
+    m_hasAnchor = true;
+  }
+  m_prior.removeFrame(idx, fixed);
+  KeyframePtr kf = m_frames[static_cast<size_t>(idx)].kf;
+  kf->frame->cMw = m_states[static_cast<size_t>(idx)].cMw;
+  kf->frame->affine.a = m_states[static_cast<size_t>(idx)].a;
+  kf->frame->affine.b = m_states[static_cast<size_t>(idx)].b;
+  kf->inWindow = false;
+  m_frames.erase(m_frames.begin() + idx);
+  m_states.erase(m_states.begin() + idx);
+  remapAfterFrameRemoval(idx);
+  if (m_frames.empty()) {
+    m_gaugeKeyframeId = -1;
+  }
+}
+
+std::vector<int> WindowOptimizer::keyframesToMarginalize() const
+{
+  std::vector<int> out;
+  const int n = static_cast<int>(m_frames.size());
+  if (n == 0) {
+    return out;
+  }
+  std::vector<char> flagged(static_cast<size_t>(n), 0);
+  int numFlagged = 0;
+  const Frame &newest = *m_frames.back().kf->frame;
+  for (int i = 0; i < n; ++i) {
+    const Keyframe &kf = *m_frames[static_cast<size_t>(i)].kf;
+    size_t in = kf.immature.size(), outPts = 0;
+    for (const MapPoint &p : kf.points) {
+      (p.status == PointStatus::active ? in : outPts)++;
+    }
+    // log of the gain ratio a_ji between the newest keyframe and this one (DSO maxLogAffFacInWindow).
+    const double logGain = std::log(kf.frame->exposure / newest.exposure) + kf.frame->affine.a - newest.affine.a;
+    const bool fewPoints = static_cast<double>(in) < m_mapper.minPointsFractionKept * static_cast<double>(in + outPts);
+    if ((fewPoints || std::fabs(logGain) > m_mapper.maxAffineChangeMarginalize) &&
+        n - numFlagged > m_mapper.minWindowSize) {
+      flagged[static_cast<size_t>(i)] = 1;
+      ++numFlagged;
+    }
+  }
+  if (n - numFlagged > m_mapper.windowSize) {
+    // DSO distance score: prefer keyframes close to many others but far from the latest one.
+    const int latest = n - kProtectedNewestKeyframes;
+    double best = std::numeric_limits<double>::infinity();
+    int chosen = -1;
+    for (int i = 0; i < latest; ++i) {
+      if (flagged[static_cast<size_t>(i)] || m_frames[static_cast<size_t>(i)].kf->id() == 0) {
+        continue;
+      }
+      const SE3d &ci = m_states[static_cast<size_t>(i)].cMw;
+      double score = 0.;
+      for (int j = 0; j <= latest; ++j) {
+        if (j != i) {
+          score +=
+              1. / (kDistanceScoreEpsilon + (m_states[static_cast<size_t>(j)].cMw * ci.inverse()).translation().norm());
+        }
+      }
+      score *= -std::sqrt((m_states[static_cast<size_t>(latest)].cMw * ci.inverse()).translation().norm());
+      if (score < best) {
+        best = score;
+        chosen = i;
+      }
+    }
+    if (chosen >= 0) {
+      flagged[static_cast<size_t>(chosen)] = 1;
+    }
+  }
+  for (int i = 0; i < n; ++i) {
+    if (flagged[static_cast<size_t>(i)]) {
+      out.push_back(m_frames[static_cast<size_t>(i)].kf->id());
+    }
+  }
+  return out;
+}
+
+void WindowOptimizer::evaluateCandidate(int host, const PointObservation &obs, double &energy, double &H, double &b,
+                                        int &inliers) const
+{
+  energy = H = b = 0.;
+  inliers = 0;
+  const Frame &fh = *m_frames[static_cast<size_t>(host)].kf->frame;
+  const KeyframeState &sh = m_states[static_cast<size_t>(host)];
+  FramePairPrecalc pair;
+  PatternLinearization lin;
+  for (size_t t = 0; t < m_frames.size(); ++t) {
+    if (static_cast<int>(t) == host) {
+      continue;
+    }
+    const Frame &ft = *m_frames[t].kf->frame;
+    pair.set(sh.cMw, sh.a, sh.b, fh.exposure, m_states[t].cMw, m_states[t].a, m_states[t].b, ft.exposure);
+    double e = 0.;
+    const ResidualState state = evaluatePattern(m_settings, ft.pyramid.level(0), pair, obs, e, &lin);
+    energy += e;
+    if (state != ResidualState::inlier) {
+      continue;
+    }
+    ++inliers;
+    for (int k = 0; k < kPatternSize; ++k) {
+      const double w = lin.weight[static_cast<size_t>(k)];
+      const double j = lin.J(k, kRelativeDims - 1);
+      H += w * j * j;
+      b += w * j * lin.r[static_cast<size_t>(k)];
+    }
+  }
+}
+
+PointActivationResult WindowOptimizer::optimizeNewPoint(int hostKeyframeId, double u, double v, double idepth,
+                                                        const std::array<float, kPatternSize> &patch,
+                                                        const std::array<float, kPatternSize> &weight,
+                                                        int iterations) const
+{
+  int host = -1;
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    if (m_frames[i].kf->id() == hostKeyframeId) {
+      host = static_cast<int>(i);
+    }
+  }
+  if (host < 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "host keyframe " +
+                                                                  std::to_string(hostKeyframeId) +
+                                                                  " is not in the window");
+  }
+  PointObservation obs;
+  obs.u = u;
+  obs.v = v;
+  obs.idepth = idepth;
+  obs.patch = patch.data();
+  obs.weight = weight.data();
+  double energy, H, b;
+  int inliers;
+  evaluateCandidate(host, obs, energy, H, b, inliers);
+  double lambda = kPointInitialLambda;
+  for (int it = 0; it < iterations && H > 0.; ++it) {
+    const double step = -b / (H * (1. + lambda));
+    PointObservation trial = obs;
+    trial.idepth += step;
+    double e2, H2, b2;
+    int in2;
+    evaluateCandidate(host, trial, e2, H2, b2, in2);
+    if (e2 < energy) {
+      obs = trial;
+      energy = e2;
+      H = H2;
+      b = b2;
+      inliers = in2;
+      lambda *= kPointLambdaAccept;
+    } else {
+      lambda *= kPointLambdaReject;
+    }
+    if (std::fabs(step) < kPointRelativeStepConverged * std::fabs(obs.idepth)) {
+      break;
+    }
+  }
+  PointActivationResult result;
+  result.idepth = obs.idepth;
+  result.idepthHessian = H;
+  result.inlierResiduals = inliers;
+  result.energy = energy;
+  result.accepted = std::isfinite(energy) && obs.idepth > 0. && inliers >= kMinInlierResidualsActivate &&
+                    H >= m_mapper.minIdepthHessianActivate;
+  return result;
+}
+
+double WindowOptimizer::idepthHessian(int hostKeyframeId, double u, double v, double idepth,
+                                      const std::array<float, kPatternSize> &patch,
+                                      const std::array<float, kPatternSize> &weight) const
+{
+  return optimizeNewPoint(hostKeyframeId, u, v, idepth, patch, weight, 0).idepthHessian;
+}
+} // namespace hslam

@@ -1,0 +1,559 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "mapping/WindowOptimizer.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace hslam
+{
+namespace
+{
+//! LM damping factors after an accepted / rejected step (DSO FullSystemOptimize: lambda *= 0.25 / *= 1e2).
+constexpr double kLambdaAcceptFactor = 0.25;
+constexpr double kLambdaRejectFactor = 100.;
+//! Beyond this damping a step cannot lower the energy any more: stop.
+constexpr double kMaxLambda = 1e8;
+//! Affine offsets b are in intensity units: divided by the 8-bit range they compare with the other step parts.
+constexpr double kAffineOffsetStepScale = 1. / 255.;
+//! A squared scale-direction norm below this (window without baseline) means there is no scale to fix.
+constexpr double kMinScaleDirectionSqNorm = 1e-18;
+
+std::string where(int line)
+{
+  return std::string(__FILE__) + ":" + std::to_string(line) + ": ";
+}
+
+double elapsedMs(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+} // namespace
+
+WindowOptimizer::WindowOptimizer(const vpHSlamParameters &params)
+    : m_mapper(params.mapper), m_gradientWeightC(params.tracker.gradientWeightC),
+      m_affinePriorA(params.tracker.affinePriorA), m_affinePriorB(params.tracker.affinePriorB),
+      m_affinePriorAFree(params.tracker.affinePriorA), m_affinePriorBFree(params.tracker.affinePriorB),
+      m_affinePriorACalib(params.tracker.affinePriorACalibrated),
+      m_affinePriorBCalib(params.tracker.affinePriorBCalibrated)
+{
+  if (m_mapper.windowSize + 1 > kMaxWindowKeyframes || m_mapper.windowSize < 2) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           where(__LINE__) + "mapper.windowSize = " + std::to_string(m_mapper.windowSize) +
+                               " is outside [2, " + std::to_string(kMaxWindowKeyframes - 1) + "]");
+  }
+  m_settings.huberThreshold = params.tracker.huberThreshold;
+  m_settings.outlierEnergy = params.tracker.outlierEnergyPerPixel * kPatternSize;
+}
+
+void WindowOptimizer::setPhotometricallyCalibrated(bool calibrated)
+{
+  m_affinePriorA = calibrated ? m_affinePriorACalib : m_affinePriorAFree;
+  m_affinePriorB = calibrated ? m_affinePriorBCalib : m_affinePriorBFree;
+}
+
+void WindowOptimizer::addKeyframe(const KeyframePtr &keyframe)
+{
+  if (!keyframe || !keyframe->frame || keyframe->frame->pyramid.numLevels() < 1) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "keyframe without frame or pyramid");
+  }
+  if (static_cast<int>(m_frames.size()) >= kMaxWindowKeyframes) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           where(__LINE__) + "window full (" + std::to_string(kMaxWindowKeyframes) +
+                               " keyframes): marginalise before adding keyframe " + std::to_string(keyframe->id()));
+  }
+  if (m_frames.empty()) {
+    m_settings.K = keyframe->frame->pyramid.level(0).K;
+  }
+  const int index = static_cast<int>(m_frames.size());
+  WindowFrame wf;
+  wf.kf = keyframe;
+  m_frames.push_back(wf);
+  KeyframeState s;
+  s.cMw = keyframe->frame->cMw;
+  s.a = keyframe->frame->affine.a;
+  s.b = keyframe->frame->affine.b;
+  m_states.push_back(s);
+  m_prior.addFrame();
+  keyframe->inWindow = true;
+  if (m_gaugeKeyframeId < 0) {
+    m_gaugeKeyframeId = keyframe->id();
+  }
+  for (WindowPoint &p : m_points) {
+    WindowResidual r;
+    r.target = index;
+    p.residuals.push_back(r);
+  }
+}
+
+std::vector<KeyframePtr> WindowOptimizer::keyframes() const
+{
+  std::vector<KeyframePtr> out;
+  for (const WindowFrame &f : m_frames) {
+    out.push_back(f.kf);
+  }
+  return out;
+}
+
+void WindowOptimizer::registerPoint(int host, int pointIndex)
+{
+  WindowPoint p;
+  p.host = host;
+  p.pointIndex = pointIndex;
+  p.residuals.reserve(static_cast<size_t>(kMaxWindowKeyframes));
+  for (int t = 0; t < static_cast<int>(m_frames.size()); ++t) {
+    if (t != host) {
+      WindowResidual r;
+      r.target = t;
+      p.residuals.push_back(r);
+    }
+  }
+  m_points.push_back(std::move(p));
+}
+
+void WindowOptimizer::syncStatesAndPoints()
+{
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    const Frame &f = *m_frames[i].kf->frame;
+    m_states[i].cMw = f.cMw;
+    m_states[i].a = f.affine.a;
+    m_states[i].b = f.affine.b;
+  }
+  // Release points whose status was changed outside (outlier / marginalised by the mapper).
+  std::vector<char> release(m_points.size(), 0);
+  bool any = false;
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    const WindowPoint &p = m_points[i];
+    if (m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)].status !=
+        PointStatus::active) {
+      release[i] = 1;
+      any = true;
+    }
+  }
+  if (any) {
+    removePointsIf(release);
+  }
+  for (size_t h = 0; h < m_frames.size(); ++h) {
+    WindowFrame &wf = m_frames[h];
+    for (size_t k = wf.scannedPoints; k < wf.kf->points.size(); ++k) {
+      if (wf.kf->points[k].status == PointStatus::active) {
+        registerPoint(static_cast<int>(h), static_cast<int>(k));
+      }
+    }
+    wf.scannedPoints = wf.kf->points.size();
+  }
+  // Refresh the pointers into Keyframe::points (the vectors may have grown) and the inverse depths.
+  for (WindowPoint &p : m_points) {
+    const MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
+    p.obs.u = mp.u;
+    p.obs.v = mp.v;
+    p.obs.idepth = mp.idepth;
+    p.obs.patch = mp.patch.data();
+    p.obs.weight = mp.patchWeight.data();
+  }
+  m_allPoints.resize(m_points.size());
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    m_allPoints[i] = static_cast<int>(i);
+  }
+  if (m_hxp.size() < m_points.size() * kMaxWindowKeyframes) {
+    m_hxp.resize(m_points.size() * kMaxWindowKeyframes);
+  }
+}
+
+void WindowOptimizer::removePointsIf(const std::vector<char> &remove)
+{
+  size_t out = 0;
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    if (!remove[i]) {
+      if (out != i) {
+        m_points[out] = std::move(m_points[i]);
+      }
+      ++out;
+    }
+  }
+  m_points.resize(out);
+  m_allPoints.resize(out);
+  for (size_t i = 0; i < out; ++i) {
+    m_allPoints[i] = static_cast<int>(i);
+  }
+}
+
+void WindowOptimizer::prepareContext()
+{
+  const int n = static_cast<int>(m_frames.size());
+  m_ctx.settings = m_settings;
+  m_ctx.numFrames = n;
+  for (int i = 0; i < n; ++i) {
+    m_ctx.levels[i] = &m_frames[static_cast<size_t>(i)].kf->frame->pyramid.level(0);
+  }
+  for (int h = 0; h < n; ++h) {
+    const KeyframeState &sh = m_states[static_cast<size_t>(h)];
+    const double eh = m_frames[static_cast<size_t>(h)].kf->frame->exposure;
+    for (int t = 0; t < n; ++t) {
+      if (t == h) {
+        continue;
+      }
+      const KeyframeState &st = m_states[static_cast<size_t>(t)];
+      m_ctx.pair(h, t).set(sh.cMw, sh.a, sh.b, eh, st.cMw, st.a, st.b,
+                           m_frames[static_cast<size_t>(t)].kf->frame->exposure);
+    }
+  }
+}
+
+void WindowOptimizer::linearizeAll(const std::vector<int> &order, WindowAccumulator &acc)
+{
+  acc.reset(static_cast<int>(m_frames.size()));
+  linearizeRange(m_ctx, m_points, order, 0, order.size(), m_hxp.data(), acc);
+}
+
+void WindowOptimizer::assembleFullSystem(const WindowAccumulator &acc, Eigen::MatrixXd &H, Eigen::VectorXd &b) const
+{
+  const int n = static_cast<int>(m_frames.size());
+  H.setZero(n * kFrameDims, n * kFrameDims);
+  b.setZero(n * kFrameDims);
+  for (int h = 0; h < n; ++h) {
+    for (int t = 0; t < n; ++t) {
+      if (h == t) {
+        continue;
+      }
+      const size_t k = static_cast<size_t>(h * kMaxWindowKeyframes + t);
+      const Mat8d &Hp = acc.pairH[k];
+      if (Hp.diagonal().sum() == 0.) {
+        continue;
+      }
+      const FramePairPrecalc &pair = m_ctx.pair(h, t);
+      const Mat8d &Ah = pair.dRelative_dHost;
+      const Mat8d &At = pair.dRelative_dTarget;
+      const Mat8d HAh = Hp * Ah;
+      const Mat8d HAt = Hp * At;
+      H.block<kFrameDims, kFrameDims>(h * kFrameDims, h * kFrameDims).noalias() += Ah.transpose() * HAh;
+      H.block<kFrameDims, kFrameDims>(t * kFrameDims, t * kFrameDims).noalias() += At.transpose() * HAt;
+      const Mat8d Hht = Ah.transpose() * HAt;
+      H.block<kFrameDims, kFrameDims>(h * kFrameDims, t * kFrameDims) += Hht;
+      H.block<kFrameDims, kFrameDims>(t * kFrameDims, h * kFrameDims) += Hht.transpose();
+      b.segment<kFrameDims>(h * kFrameDims).noalias() += Ah.transpose() * acc.pairB[k];
+      b.segment<kFrameDims>(t * kFrameDims).noalias() += At.transpose() * acc.pairB[k];
+    }
+  }
+}
+
+double WindowOptimizer::priorEnergy() const
+{
+  // DSO: affine priors pull a and b towards 0 (weights from the tracker parameters).
+  double e = 0.;
+  for (const KeyframeState &s : m_states) {
+    e += m_affinePriorA * s.a * s.a + m_affinePriorB * s.b * s.b;
+  }
+  return e + m_prior.energy(m_states);
+}
+
+int WindowOptimizer::gaugeFixedIndex() const
+{
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    if (m_frames[i].kf->id() == m_gaugeKeyframeId) {
+      return static_cast<int>(i);
+    }
+  }
+  // The gauge keyframe left: the prior holds the gauge, unless it holds nothing (then fix the oldest).
+  return m_prior.hasInformation() || m_frames.empty() ? -1 : 0;
+}
+
+Eigen::VectorXd WindowOptimizer::scaleDirection() const
+{
+  // Scaling the scene about the anchor camera's centre: c_iMa = (R, t) -> (R, s t), i.e. a left translation
+  // perturbation t_ia ds of every pose (inverse depths scale by 1/s, eliminated by the Schur complement).
+  const int fixed = gaugeFixedIndex();
+  const SE3d aMw = fixed >= 0 ? m_states[static_cast<size_t>(fixed)].cMw : m_gaugeAnchor.cMw;
+  const SE3d wMa = aMw.inverse();
+  Eigen::VectorXd n = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(m_frames.size()) * kFrameDims);
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    n.segment<3>(static_cast<Eigen::Index>(i) * kFrameDims) = (m_states[i].cMw * wMa).translation();
+  }
+  return n;
+}
+
+void WindowOptimizer::addPriors(Eigen::MatrixXd &H, Eigen::VectorXd &b) const
+{
+  // DSO: affine priors towards a = b = 0, then the marginalisation prior's quadratic.
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    const int o = static_cast<int>(i) * kFrameDims;
+    H(o + 6, o + 6) += m_affinePriorA;
+    H(o + 7, o + 7) += m_affinePriorB;
+    b[o + 6] += m_affinePriorA * m_states[i].a;
+    b[o + 7] += m_affinePriorB * m_states[i].b;
+  }
+  if (m_prior.hasInformation()) {
+    H += m_prior.H();
+    b += m_prior.gradient(m_states);
+  }
+}
+
+void WindowOptimizer::reducedSystem(Eigen::MatrixXd &H, Eigen::VectorXd &b, bool withPriors)
+{
+  syncStatesAndPoints();
+  prepareContext();
+  WindowAccumulator acc;
+  linearizeAll(m_allPoints, acc);
+  schurRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), 0., acc);
+  assembleFullSystem(acc, H, b);
+  H -= acc.Hsc;
+  b -= acc.bsc;
+  if (withPriors) {
+    addPriors(H, b);
+  }
+}
+
+double WindowOptimizer::totalEnergy()
+{
+  syncStatesAndPoints();
+  prepareContext();
+  return energyRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size()) + priorEnergy();
+}
+
+bool WindowOptimizer::solveStep(double lambda, Eigen::VectorXd &dx)
+{
+  const int n = static_cast<int>(m_frames.size());
+  const int dim = n * kFrameDims;
+  m_acc.Hsc.setZero();
+  m_acc.bsc.setZero();
+  schurRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), lambda, m_acc);
+  m_Hred = m_H;
+  m_Hred.diagonal() *= (1. + lambda);
+  m_Hred -= m_acc.Hsc;
+  m_bred = m_b - m_acc.bsc;
+
+  // Free dimensions: everything but the gauge keyframe and states without any information.
+  const int fixed = gaugeFixedIndex();
+  std::vector<int> freeDims;
+  freeDims.reserve(static_cast<size_t>(dim));
+  for (int i = 0; i < dim; ++i) {
+    if (i / kFrameDims != fixed && m_H(i, i) > 0.) {
+      freeDims.push_back(i);
+    }
+  }
+  dx.setZero(dim);
+  const int m = static_cast<int>(freeDims.size());
+  if (m == 0) {
+    return true;
+  }
+  // Jacobi scaling (the solution does not depend on it; the conditioning does).
+  Eigen::VectorXd s(m), bs(m);
+  Eigen::MatrixXd Hs(m, m);
+  for (int i = 0; i < m; ++i) {
+    s[i] = 1. / std::sqrt(m_H(freeDims[static_cast<size_t>(i)], freeDims[static_cast<size_t>(i)]));
+  }
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < m; ++j) {
+      Hs(i, j) = s[i] * s[j] * m_Hred(freeDims[static_cast<size_t>(i)], freeDims[static_cast<size_t>(j)]);
+    }
+    bs[i] = s[i] * m_bred[freeDims[static_cast<size_t>(i)]];
+  }
+  // Scale gauge: constrain the step orthogonal to the scale direction (ns = S^-1 n in scaled coordinates).
+  const Eigen::VectorXd nFull = scaleDirection();
+  Eigen::VectorXd ns(m);
+  for (int i = 0; i < m; ++i) {
+    ns[i] = nFull[freeDims[static_cast<size_t>(i)]] / s[i];
+  }
+  const double nsSq = ns.squaredNorm();
+  if (nsSq > kMinScaleDirectionSqNorm) {
+    Hs.noalias() += ns * ns.transpose() / nsSq;
+  }
+  m_ldlt.compute(Hs);
+  if (m_ldlt.info() != Eigen::Success) {
+    return false;
+  }
+  Eigen::VectorXd xs = -m_ldlt.solve(bs);
+  if (!xs.allFinite()) {
+    return false;
+  }
+  if (nsSq > kMinScaleDirectionSqNorm) {
+    xs -= ns * (ns.dot(xs) / nsSq);
+  }
+  for (int i = 0; i < m; ++i) {
+    dx[freeDims[static_cast<size_t>(i)]] = s[i] * xs[i];
+  }
+  return true;
+}
+
+void WindowOptimizer::backupStates()
+{
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    m_frames[i].backup = m_states[i];
+  }
+  for (WindowPoint &p : m_points) {
+    p.idepthBackup = p.obs.idepth;
+  }
+}
+
+void WindowOptimizer::restoreStates()
+{
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    m_states[i] = m_frames[i].backup;
+  }
+  for (WindowPoint &p : m_points) {
+    p.obs.idepth = p.idepthBackup;
+  }
+}
+
+void WindowOptimizer::applyStep(const Eigen::VectorXd &dx, double lambda)
+{
+  const int n = static_cast<int>(m_frames.size());
+  for (int i = 0; i < n; ++i) {
+    const Vec8d d = dx.segment<kFrameDims>(i * kFrameDims);
+    KeyframeState &s = m_states[static_cast<size_t>(i)];
+    s.cMw = SE3d::exp(d.head<6>()) * s.cMw;
+    s.a += d[6];
+    s.b += d[7];
+  }
+  // Back-substitution: d_rho = -(b_rho + H_rho,x dx) / (H_rho,rho (1 + lambda)), the same damping as the Schur.
+  for (size_t pi = 0; pi < m_points.size(); ++pi) {
+    WindowPoint &p = m_points[pi];
+    const double H = p.Hpp * (1. + lambda);
+    if (p.inlierResiduals == 0 || !(H > 0.)) {
+      continue;
+    }
+    const Vec8d *cross = m_hxp.data() + pi * kMaxWindowKeyframes;
+    double rhs = p.bp;
+    for (int f = 0; f < n; ++f) {
+      rhs += cross[f].dot(dx.segment<kFrameDims>(f * kFrameDims));
+    }
+    p.obs.idepth -= rhs / H;
+  }
+}
+
+double WindowOptimizer::stepNorm(const Eigen::VectorXd &dx) const
+{
+  // Translation is compared in units of the scene depth (DSO normalises it by the mean inverse depth).
+  double meanIdepth = 0.;
+  for (const WindowPoint &p : m_points) {
+    meanIdepth += p.obs.idepth;
+  }
+  meanIdepth = m_points.empty() ? 1. : std::fabs(meanIdepth) / static_cast<double>(m_points.size());
+  double norm = 0.;
+  for (int i = 0; i < static_cast<int>(m_frames.size()); ++i) {
+    const Vec8d d = dx.segment<kFrameDims>(i * kFrameDims);
+    norm = std::max({norm, d.head<3>().norm() * meanIdepth, d.segment<3>(3).norm(), std::fabs(d[6]),
+                     std::fabs(d[7]) * kAffineOffsetStepScale});
+  }
+  return norm;
+}
+
+OptimizationSummary WindowOptimizer::optimize(int maxIterations)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  OptimizationSummary summary;
+  syncStatesAndPoints();
+  summary.activePoints = static_cast<int>(m_points.size());
+  if (m_frames.size() < 2 || m_points.empty()) {
+    summary.totalMs = elapsedMs(t0);
+    return summary;
+  }
+  prepareContext();
+  linearizeAll(m_allPoints, m_acc);
+  // Affine priors (DSO) and the marginalisation prior enter the frame system directly.
+
+  assembleFullSystem(m_acc, m_H, m_b);
+  addPriors(m_H, m_b);
+
+  double energy = m_acc.energy + priorEnergy();
+  summary.initialEnergy = energy;
+  double lambda = m_mapper.initialLambda;
+  Eigen::VectorXd dx;
+  for (int it = 0; it < maxIterations; ++it) {
+    ++summary.iterations;
+    if (!solveStep(lambda, dx)) {
+      lambda *= kLambdaRejectFactor;
+      if (lambda > kMaxLambda) {
+        break;
+      }
+      continue;
+    }
+    const double norm = stepNorm(dx);
+    backupStates();
+    applyStep(dx, lambda);
+    prepareContext();
+    const double newEnergy = energyRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size()) + priorEnergy();
+    if (newEnergy < energy) {
+      energy = newEnergy;
+      summary.acceptedEnergies.push_back(energy);
+      ++summary.acceptedSteps;
+      lambda *= kLambdaAcceptFactor;
+      linearizeAll(m_allPoints, m_acc);
+      assembleFullSystem(m_acc, m_H, m_b);
+      addPriors(m_H, m_b);
+      summary.converged = norm < m_mapper.stepConvergenceThreshold;
+    } else {
+      restoreStates();
+      prepareContext();
+      lambda *= kLambdaRejectFactor;
+      // A rejected step that small is numerical noise around the minimum.
+      summary.converged = norm < m_mapper.stepConvergenceThreshold;
+    }
+    if ((summary.converged && summary.iterations >= m_mapper.minOptimizationIterations) || lambda > kMaxLambda) {
+      break;
+    }
+  }
+  summary.finalEnergy = energy;
+  summary.finalLambda = lambda;
+  summary.inlierResiduals = m_acc.inliers;
+  finalizeOutliers(summary);
+  writeBack();
+  summary.totalMs = elapsedMs(t0);
+  summary.msPerIteration = summary.iterations > 0 ? summary.totalMs / summary.iterations : 0.;
+  return summary;
+}
+
+void WindowOptimizer::finalizeOutliers(OptimizationSummary &summary)
+{
+  // m_points' residual states are those of the last linearisation, i.e. of the final state (DSO removes the
+  // residuals found outliers there for good).
+  std::vector<char> remove(m_points.size(), 0);
+  bool any = false;
+  for (size_t i = 0; i < m_points.size(); ++i) {
+    WindowPoint &p = m_points[i];
+    const size_t before = p.residuals.size();
+    p.residuals.erase(std::remove_if(p.residuals.begin(), p.residuals.end(),
+                                     [](const WindowResidual &r) { return r.state == ResidualState::outlier; }),
+                      p.residuals.end());
+    const int removed = static_cast<int>(before - p.residuals.size());
+    p.outlierResidualsRemoved += removed;
+    summary.removedResiduals += removed;
+    const int seen = p.outlierResidualsRemoved + p.inlierResiduals;
+    if (p.outlierResidualsRemoved > 0 && (p.residuals.empty() || static_cast<double>(p.outlierResidualsRemoved) >
+                                                                     m_mapper.outlierResidualFraction * seen)) {
+      MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
+      mp.status = PointStatus::outlier;
+      remove[i] = 1;
+      any = true;
+      ++summary.outlierPoints;
+    }
+  }
+  if (any) {
+    // Write the flagged points' last estimate before they leave.
+    writeBack();
+    removePointsIf(remove);
+  }
+}
+
+void WindowOptimizer::writeBack()
+{
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    Frame &f = *m_frames[i].kf->frame;
+    f.cMw = m_states[i].cMw;
+    f.affine.a = m_states[i].a;
+    f.affine.b = m_states[i].b;
+  }
+  for (const WindowPoint &p : m_points) {
+    MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
+    mp.idepth = p.obs.idepth;
+    // DSO's variance proxy: the inverse of the point's own (undamped) Hessian block.
+    mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
+  }
+}
+} // namespace hslam
