@@ -1,0 +1,524 @@
+/*
+ * H-SLAM for ViSP.
+ */
+// Coarse-to-fine direct alignment (DSO CoarseTracker: makeCoarseDepthL0, calcRes, calcGSSSE, trackNewestCoarse),
+// re-implemented; see CoarseTracker.h for the model and the conventions.
+#include "tracking/CoarseTracker.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <Eigen/Cholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace hslam
+{
+namespace
+{
+//! DSO: the cutoff of a level is doubled while more than this share of its residuals is saturated...
+constexpr double kMaxSaturatedRatio = 0.6;
+//! ... up to this factor of the base cutoff (DSO: levelCutoffRepeat < 50).
+constexpr float kMaxCutoffRepeat = 50.f;
+//! Levenberg damping: start, and the value below which the step is extrapolated (DSO trackNewestCoarse).
+constexpr double kInitialLambda = 0.01;
+constexpr double kLambdaExtrapolationLimit = 0.001;
+//! Damping factor on an accepted / rejected step (DSO).
+constexpr double kLambdaOnAccept = 0.5;
+constexpr double kLambdaOnReject = 4.0;
+//! A level stops when the scaled increment norm falls to this (DSO).
+constexpr double kMinIncrementNorm = 1e-3;
+//! A level fails when its RMSE exceeds this factor of the given bound (DSO: 1.5 x minResForAbort).
+constexpr double kAbortResidualFactor = 1.5;
+//! Brightness change relative to the reference judged implausible (DSO: |log a_ji| > 1.5, |b_ji| > 200).
+constexpr double kMaxLogGainChange = 1.5;
+constexpr double kMaxOffsetChange = 200.;
+//! A level with fewer residuals in the new image is a failure (own choice: the 8-dim system needs many more).
+constexpr int kCoarseMinResiduals = 20;
+//! Flow indicators sample every n-th level-0 point (DSO: i % 32 == 0) and divide by (count + 0.1).
+constexpr int kFlowSampleStride = 32;
+constexpr double kFlowSampleRegulariser = 0.1;
+//! Reference pixels closer than this to the border are not used (DSO: 2 <= x < w - 2).
+constexpr int kReferenceBorder = 2;
+//! Warped points must have this margin to the border of the new image (DSO: 2 < Ku < w - 3).
+constexpr float kTargetBorder = 2.f;
+//! Levels below this dilate the inverse-depth map diagonally, coarser ones along the axes (DSO).
+constexpr int kDiagonalDilationLevels = 2;
+/*!
+  DSO's variable scaling of the 8-dim step (SCALE_XI_ROT = 1 on the first three twist entries, SCALE_XI_TRANS =
+  0.5 on the last three, SCALE_A = 10, SCALE_B = 1000): only the convergence test and the affine priors see it,
+  the damped Gauss-Newton step itself is invariant to a diagonal scaling.
+*/
+constexpr double kStepScale[8] = {1., 1., 1., 0.5, 0.5, 0.5, 10., 1000.};
+constexpr int kIndexA = 6;
+constexpr int kIndexB = 7;
+
+[[noreturn]] void throwError(vpHSlamException::ErrorCode code, int line, const std::string &what)
+{
+  std::ostringstream os;
+  os << __FILE__ << ":" << line << ": CoarseTracker: " << what;
+  throw vpHSlamException(code, os.str());
+}
+
+inline double nan()
+{
+  return std::numeric_limits<double>::quiet_NaN();
+}
+} // namespace
+
+CoarseTracker::ResidualStats &CoarseTracker::ResidualStats::operator+=(const ResidualStats &o)
+{
+  energy += o.energy;
+  numTerms += o.numTerms;
+  numSaturated += o.numSaturated;
+  numAboveBaseCutoff += o.numAboveBaseCutoff;
+  shiftT += o.shiftT;
+  shiftR += o.shiftR;
+  shiftRT += o.shiftRT;
+  shiftSamples += o.shiftSamples;
+  return *this;
+}
+
+CoarseTracker::CoarseTracker(const vpHSlamParameters::Tracker &params, bool photometricCalibration)
+    : m_params(params), m_photometricCalibration(photometricCalibration), m_firstRmse(nan())
+{
+  if (m_params.iterationsPerLevel.empty()) {
+    throwError(vpHSlamException::invalidArgument, __LINE__, "Tracker::iterationsPerLevel is empty");
+  }
+  if (!(m_params.huberThreshold > 0.) || !(m_params.coarseCutoffResidual > 0.)) {
+    throwError(vpHSlamException::invalidArgument, __LINE__,
+               "Tracker::huberThreshold and Tracker::coarseCutoffResidual must be > 0");
+  }
+  // DSO starts with a large "last RMSE" so the first frame accepts its first good hypothesis.
+  constexpr double kInitialLastRmse = 100.;
+  m_lastRmse.fill(kInitialLastRmse);
+}
+
+void CoarseTracker::setReference(const Frame &refKf, const std::vector<CoarseTrackerPoint> &points)
+{
+  const ImagePyramid &pyr = refKf.pyramid;
+  if (pyr.numLevels() < 1 || pyr.numLevels() > kCoarseTrackerMaxLevels) {
+    throwError(vpHSlamException::invalidArgument, __LINE__,
+               "reference pyramid has " + std::to_string(pyr.numLevels()) + " levels, expected 1.." +
+                   std::to_string(kCoarseTrackerMaxLevels));
+  }
+  m_numLevels = pyr.numLevels();
+  m_refAffine = refKf.affine;
+  m_refExposure = refKf.exposure;
+  m_firstRmse = nan();
+  for (int l = 0; l < m_numLevels; ++l) {
+    const PyramidLevel &src = pyr.level(l);
+    LevelData &dst = m_levels[static_cast<size_t>(l)];
+    dst.width = src.width;
+    dst.height = src.height;
+    dst.K = src.K;
+    const size_t n = static_cast<size_t>(src.width) * static_cast<size_t>(src.height);
+    dst.idepthMap.assign(n, 0.f);
+    dst.weightMap.assign(n, 0.f);
+    dst.weightBackup.resize(n);
+  }
+  buildDepthMaps(points);
+
+  // Residual point lists (SoA), level by level, from the normalised maps.
+  int maxPoints = 0;
+  for (int l = 0; l < m_numLevels; ++l) {
+    LevelData &L = m_levels[static_cast<size_t>(l)];
+    const PyramidLevel &refLevel = pyr.level(l);
+    const size_t n = L.idepthMap.size();
+    L.pu.resize(n);
+    L.pv.resize(n);
+    L.pidepth.resize(n);
+    L.pcolor.resize(n);
+    int count = 0;
+    for (int y = kReferenceBorder; y < L.height - kReferenceBorder; ++y) {
+      for (int x = kReferenceBorder; x < L.width - kReferenceBorder; ++x) {
+        const size_t i = static_cast<size_t>(y) * static_cast<size_t>(L.width) + static_cast<size_t>(x);
+        if (!(L.weightMap[i] > 0.f)) {
+          continue;
+        }
+        const float idepth = L.idepthMap[i] / L.weightMap[i];
+        const float color = refLevel.color[i][0];
+        if (!(idepth > 0.f) || !std::isfinite(idepth) || !std::isfinite(color)) {
+          continue;
+        }
+        L.pu[static_cast<size_t>(count)] = static_cast<float>(x);
+        L.pv[static_cast<size_t>(count)] = static_cast<float>(y);
+        L.pidepth[static_cast<size_t>(count)] = idepth;
+        L.pcolor[static_cast<size_t>(count)] = color;
+        ++count;
+      }
+    }
+    L.numPoints = count;
+    maxPoints = std::max(maxPoints, count);
+  }
+  const size_t m = static_cast<size_t>(maxPoints);
+  for (std::vector<float> *buf :
+       {&m_bufIdepth, &m_bufU, &m_bufV, &m_bufDx, &m_bufDy, &m_bufResidual, &m_bufWeight, &m_bufRefColor}) {
+    buf->assign(m, 0.f);
+  }
+}
+
+void CoarseTracker::buildDepthMaps(const std::vector<CoarseTrackerPoint> &points)
+{
+  // Level 0: weighted sums of inverse depth at the nearest pixel (DSO makeCoarseDepthL0).
+  LevelData &L0 = m_levels[0];
+  for (const CoarseTrackerPoint &p : points) {
+    const int x = static_cast<int>(std::floor(p.u + 0.5f));
+    const int y = static_cast<int>(std::floor(p.v + 0.5f));
+    if (x < 0 || y < 0 || x >= L0.width || y >= L0.height || !(p.idepth > 0.f) || !(p.weight > 0.f) ||
+        !std::isfinite(p.idepth)) {
+      continue;
+    }
+    const size_t i = static_cast<size_t>(y) * static_cast<size_t>(L0.width) + static_cast<size_t>(x);
+    L0.idepthMap[i] += p.idepth * p.weight;
+    L0.weightMap[i] += p.weight;
+  }
+  // Coarser levels: sums over 2x2 blocks (the ratio stays a weighted average).
+  for (int l = 1; l < m_numLevels; ++l) {
+    const LevelData &F = m_levels[static_cast<size_t>(l - 1)];
+    LevelData &C = m_levels[static_cast<size_t>(l)];
+    for (int y = 0; y < C.height; ++y) {
+      for (int x = 0; x < C.width; ++x) {
+        const size_t f = static_cast<size_t>(2 * y) * static_cast<size_t>(F.width) + static_cast<size_t>(2 * x);
+        const size_t fw = f + static_cast<size_t>(F.width);
+        const size_t c = static_cast<size_t>(y) * static_cast<size_t>(C.width) + static_cast<size_t>(x);
+        C.idepthMap[c] = F.idepthMap[f] + F.idepthMap[f + 1] + F.idepthMap[fw] + F.idepthMap[fw + 1];
+        C.weightMap[c] = F.weightMap[f] + F.weightMap[f + 1] + F.weightMap[fw] + F.weightMap[fw + 1];
+      }
+    }
+  }
+  // One dilation step: an empty pixel takes the mean of its filled neighbours (diagonal neighbours on the two
+  // finest levels, axis neighbours on coarser ones, DSO). The sums are averaged as sums, so the normalised value
+  // is the weighted mean of the neighbours.
+  for (int l = 0; l < m_numLevels; ++l) {
+    LevelData &L = m_levels[static_cast<size_t>(l)];
+    const int w = L.width;
+    std::copy(L.weightMap.begin(), L.weightMap.end(), L.weightBackup.begin());
+    const bool diagonal = l < kDiagonalDilationLevels;
+    const int o1 = diagonal ? w + 1 : 1;
+    const int o2 = diagonal ? w - 1 : w;
+    const int offsets[4] = {o1, -o1, o2, -o2};
+    for (int y = 1; y < L.height - 1; ++y) {
+      for (int x = 1; x < w - 1; ++x) {
+        const int i = y * w + x;
+        if (L.weightBackup[static_cast<size_t>(i)] > 0.f) {
+          continue;
+        }
+        float sumIdepth = 0.f, sumWeight = 0.f;
+        int count = 0;
+        for (int o : offsets) {
+          const size_t j = static_cast<size_t>(i + o);
+          if (L.weightBackup[j] > 0.f) {
+            sumIdepth += L.idepthMap[j];
+            sumWeight += L.weightBackup[j];
+            ++count;
+          }
+        }
+        if (count > 0) {
+          L.idepthMap[static_cast<size_t>(i)] = sumIdepth / static_cast<float>(count);
+          L.weightMap[static_cast<size_t>(i)] = sumWeight / static_cast<float>(count);
+        }
+      }
+    }
+  }
+}
+
+void CoarseTracker::setWarp(int level, const PyramidLevel &target, const SE3d &newMref, const AffineBrightness &affine,
+                            double newExposure)
+{
+  const PinholeIntrinsics &K = m_levels[static_cast<size_t>(level)].K;
+  Eigen::Matrix3d Kinv = Eigen::Matrix3d::Identity();
+  Kinv(0, 0) = 1. / K.fx;
+  Kinv(1, 1) = 1. / K.fy;
+  Kinv(0, 2) = -K.cx / K.fx;
+  Kinv(1, 2) = -K.cy / K.fy;
+  m_warp.Kinv = Kinv.cast<float>();
+  m_warp.RKinv = (newMref.rotationMatrix() * Kinv).cast<float>();
+  m_warp.t = newMref.translation().cast<float>();
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(m_refExposure, m_refAffine, newExposure, affine, aji, bji);
+  m_warp.aji = static_cast<float>(aji);
+  m_warp.bji = static_cast<float>(bji);
+  m_warp.refB = static_cast<float>(m_refAffine.b);
+  m_warp.fx = static_cast<float>(K.fx);
+  m_warp.fy = static_cast<float>(K.fy);
+  m_warp.cx = static_cast<float>(K.cx);
+  m_warp.cy = static_cast<float>(K.cy);
+  m_warp.baseCutoff = static_cast<float>(m_params.coarseCutoffResidual);
+  m_warp.target = &target;
+}
+
+void CoarseTracker::computeResiduals(int level, int begin, int end, float cutoff, ResidualStats &stats)
+{
+  const LevelData &L = m_levels[static_cast<size_t>(level)];
+  const Warp &W = m_warp;
+  const PyramidLevel &target = *W.target;
+  const float huber = static_cast<float>(m_params.huberThreshold);
+  // Energy of a residual exactly at the cutoff: saturated residuals count with it (DSO).
+  const float maxEnergy = 2.f * huber * cutoff - huber * huber;
+  const bool sampleFlow = (level == 0);
+  for (int i = begin; i < end; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    const float id = L.pidepth[k];
+    const Eigen::Vector3f pixel(L.pu[k], L.pv[k], 1.f);
+    // Point in the new camera scaled by the reference inverse depth: (R p + t) * id, with p = K^-1 x / id.
+    const Eigen::Vector3f pt = W.RKinv * pixel + W.t * id;
+    const float u = pt[0] / pt[2];
+    const float v = pt[1] / pt[2];
+    const float Ku = W.fx * u + W.cx;
+    const float Kv = W.fy * v + W.cy;
+    const float newIdepth = id / pt[2];
+
+    if (sampleFlow && i % kFlowSampleStride == 0) {
+      // Mean squared pixel shift of the translation alone (both signs), of the rotation alone and of both (DSO).
+      const Eigen::Vector3f ray = W.Kinv * pixel;
+      const Eigen::Vector3f rotated = W.RKinv * pixel;
+      const Eigen::Vector3f candidates[5] = {ray + W.t * id, ray - W.t * id, rotated, pt, rotated - W.t * id};
+      float shifts[5];
+      for (int c = 0; c < 5; ++c) {
+        const float du = W.fx * candidates[c][0] / candidates[c][2] + W.cx - pixel[0];
+        const float dv = W.fy * candidates[c][1] / candidates[c][2] + W.cy - pixel[1];
+        shifts[c] = du * du + dv * dv;
+      }
+      stats.shiftT += static_cast<double>(shifts[0] + shifts[1]);
+      stats.shiftR += static_cast<double>(2.f * shifts[2]);
+      stats.shiftRT += static_cast<double>(shifts[3] + shifts[4]);
+      stats.shiftSamples += 2;
+    }
+
+    m_bufWeight[k] = 0.f;
+    if (!(newIdepth > 0.f) || !target.isInside(Ku, Kv, kTargetBorder)) {
+      continue;
+    }
+    const Eigen::Vector3f hit = target.interpolate(Ku, Kv);
+    if (!std::isfinite(hit[0])) {
+      continue;
+    }
+    const float refColor = L.pcolor[k];
+    const float residual = hit[0] - (W.aji * refColor + W.bji);
+    const float absRes = std::fabs(residual);
+    ++stats.numTerms;
+    if (absRes > W.baseCutoff) {
+      ++stats.numAboveBaseCutoff;
+    }
+    if (absRes > cutoff) {
+      stats.energy += static_cast<double>(maxEnergy);
+      ++stats.numSaturated;
+      continue;
+    }
+    const float hw = absRes < huber ? 1.f : huber / absRes;
+    stats.energy += static_cast<double>(hw * residual * residual * (2.f - hw));
+    m_bufIdepth[k] = newIdepth;
+    m_bufU[k] = u;
+    m_bufV[k] = v;
+    m_bufDx[k] = hit[1];
+    m_bufDy[k] = hit[2];
+    m_bufResidual[k] = residual;
+    m_bufWeight[k] = hw;
+    m_bufRefColor[k] = refColor;
+  }
+}
+
+void CoarseTracker::accumulate(int begin, int end, NormalEquations8 &eq) const
+{
+  const Warp &W = m_warp;
+  NormalEquations8::Vec9f Jr;
+  for (int i = begin; i < end; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    const float weight = m_bufWeight[k];
+    if (weight == 0.f) {
+      continue;
+    }
+    // d r / d (twist, a, b) for newMref <- exp(twist) newMref: image gradient times the derivative of the
+    // projection of the moved point (translation first), then the affine terms (see CoarseTracker.h).
+    const float gx = m_bufDx[k] * W.fx;
+    const float gy = m_bufDy[k] * W.fy;
+    const float u = m_bufU[k];
+    const float v = m_bufV[k];
+    const float id = m_bufIdepth[k];
+    Jr[0] = id * gx;
+    Jr[1] = id * gy;
+    Jr[2] = -id * (u * gx + v * gy);
+    Jr[3] = -(u * v * gx + (1.f + v * v) * gy);
+    Jr[4] = (1.f + u * u) * gx + u * v * gy;
+    Jr[5] = u * gy - v * gx;
+    Jr[6] = W.aji * (W.refB - m_bufRefColor[k]);
+    Jr[7] = -1.f;
+    Jr[8] = m_bufResidual[k];
+    eq.add(Jr, weight);
+  }
+}
+
+double CoarseTracker::priorEnergy(const AffineBrightness &affine) const
+{
+  const double wA = m_photometricCalibration ? m_params.affinePriorACalibrated : m_params.affinePriorA;
+  const double wB = m_photometricCalibration ? m_params.affinePriorBCalibrated : m_params.affinePriorB;
+  const double sa = affine.a / kStepScale[kIndexA];
+  const double sb = affine.b / kStepScale[kIndexB];
+  return wA * sa * sa + wB * sb * sb;
+}
+
+CoarseTracker::ResidualStats CoarseTracker::evaluate(int level, const PyramidLevel &target, const SE3d &newMref,
+                                                     const AffineBrightness &affine, double newExposure, float cutoff)
+{
+  setWarp(level, target, newMref, affine, newExposure);
+  ResidualStats stats;
+  computeResiduals(level, 0, m_levels[static_cast<size_t>(level)].numPoints, cutoff, stats);
+  return stats;
+}
+
+void CoarseTracker::buildSystem(int level, const ResidualStats &stats, const AffineBrightness &affine,
+                                Eigen::Matrix<double, 8, 8> &H, Eigen::Matrix<double, 8, 1> &b) const
+{
+  NormalEquations8 eq;
+  accumulate(0, m_levels[static_cast<size_t>(level)].numPoints, eq);
+  eq.flush();
+  // The objective is the mean energy (DSO normalises by the residual count), priors included.
+  const double invN = 1. / std::max(1, stats.numTerms);
+  H = eq.H() * invN;
+  b = eq.b() * invN;
+  const double wA = m_photometricCalibration ? m_params.affinePriorACalibrated : m_params.affinePriorA;
+  const double wB = m_photometricCalibration ? m_params.affinePriorBCalibrated : m_params.affinePriorB;
+  const double hA = wA / (kStepScale[kIndexA] * kStepScale[kIndexA]) * invN;
+  const double hB = wB / (kStepScale[kIndexB] * kStepScale[kIndexB]) * invN;
+  H(kIndexA, kIndexA) += hA;
+  H(kIndexB, kIndexB) += hB;
+  b(kIndexA) += hA * affine.a;
+  b(kIndexB) += hB * affine.b;
+}
+
+bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness &affine, CoarseTrackingResult &result,
+                          const CoarseRmsePerLevel *abortRmse)
+{
+  result = CoarseTrackingResult();
+  result.hypothesesTried = 1;
+  result.newMref = newMref;
+  result.affine = affine;
+  if (m_numLevels == 0 || m_levels[0].numPoints == 0) {
+    result.status = CoarseTrackingStatus::noReference;
+    return false;
+  }
+  const ImagePyramid &pyr = newFrame.pyramid;
+  if (pyr.numLevels() < 1 || pyr.level(0).width != m_levels[0].width || pyr.level(0).height != m_levels[0].height) {
+    throwError(vpHSlamException::invalidImage, __LINE__,
+               "new frame's pyramid does not match the reference (" + std::to_string(m_levels[0].width) + "x" +
+                   std::to_string(m_levels[0].height) + ")");
+  }
+  const int levels = std::min(m_numLevels, pyr.numLevels());
+  result.numLevels = levels;
+  const float baseCutoff = static_cast<float>(m_params.coarseCutoffResidual);
+  const double exposure = newFrame.exposure;
+
+  SE3d current = newMref;
+  AffineBrightness currentAffine = affine;
+  bool haveRepeated = false;
+  ResidualStats statsOld;
+  auto fail = [&](CoarseTrackingStatus status, int level) {
+    result.status = status;
+    result.failedLevel = level;
+    result.newMref = current;
+    result.affine = currentAffine;
+    return false;
+  };
+
+  for (int lvl = levels - 1; lvl >= 0; --lvl) {
+    const PyramidLevel &target = pyr.level(lvl);
+    float cutoffRepeat = 1.f;
+    statsOld = evaluate(lvl, target, current, currentAffine, exposure, baseCutoff);
+    while (statsOld.numTerms > 0 &&
+           static_cast<double>(statsOld.numSaturated) > kMaxSaturatedRatio * statsOld.numTerms &&
+           cutoffRepeat < kMaxCutoffRepeat) {
+      cutoffRepeat *= 2.f;
+      statsOld = evaluate(lvl, target, current, currentAffine, exposure, baseCutoff * cutoffRepeat);
+    }
+    if (statsOld.numTerms < kCoarseMinResiduals) {
+      return fail(CoarseTrackingStatus::tooFewResiduals, lvl);
+    }
+    const float cutoff = baseCutoff * cutoffRepeat;
+    double objectiveOld = (statsOld.energy + priorEnergy(currentAffine)) / statsOld.numTerms;
+
+    Eigen::Matrix<double, 8, 8> H;
+    Eigen::Matrix<double, 8, 1> b;
+    buildSystem(lvl, statsOld, currentAffine, H, b);
+    double lambda = kInitialLambda;
+    const size_t iterIndex = std::min(static_cast<size_t>(lvl), m_params.iterationsPerLevel.size() - 1);
+    const int maxIterations = m_params.iterationsPerLevel[iterIndex];
+    for (int it = 0; it < maxIterations; ++it) {
+      ++result.iterations;
+      Eigen::Matrix<double, 8, 8> Hl = H;
+      Hl.diagonal() *= (1. + lambda);
+      Eigen::Matrix<double, 8, 1> inc = Hl.ldlt().solve(-b);
+      // DSO: with little damping the step is lengthened a little (fourth root of the damping ratio).
+      if (lambda < kLambdaExtrapolationLimit) {
+        inc *= std::sqrt(std::sqrt(kLambdaExtrapolationLimit / lambda));
+      }
+      if (!inc.allFinite()) {
+        inc.setZero();
+      }
+      const SE3d candidate = SE3d::exp(inc.head<6>()) * current;
+      AffineBrightness candidateAffine = currentAffine;
+      candidateAffine.a += inc[kIndexA];
+      candidateAffine.b += inc[kIndexB];
+      const ResidualStats statsNew = evaluate(lvl, target, candidate, candidateAffine, exposure, cutoff);
+      const double objectiveNew = statsNew.numTerms >= kCoarseMinResiduals
+                                      ? (statsNew.energy + priorEnergy(candidateAffine)) / statsNew.numTerms
+                                      : std::numeric_limits<double>::infinity();
+      if (objectiveNew < objectiveOld) {
+        current = candidate;
+        currentAffine = candidateAffine;
+        statsOld = statsNew;
+        objectiveOld = objectiveNew;
+        buildSystem(lvl, statsOld, currentAffine, H, b);
+        lambda *= kLambdaOnAccept;
+      } else {
+        lambda *= kLambdaOnReject;
+        lambda = std::max(lambda, kLambdaExtrapolationLimit);
+      }
+      Eigen::Matrix<double, 8, 1> scaled;
+      for (int j = 0; j < 8; ++j) {
+        scaled[j] = inc[j] / kStepScale[j];
+      }
+      if (!(scaled.norm() > kMinIncrementNorm)) {
+        break;
+      }
+    }
+    // statsOld describes the kept state (set on acceptance), whatever the buffers hold now.
+    const double rmse = std::sqrt(statsOld.energy / std::max(1, statsOld.numTerms));
+    result.rmse[static_cast<size_t>(lvl)] = rmse;
+    result.flowT = statsOld.shiftT / (statsOld.shiftSamples + kFlowSampleRegulariser);
+    result.flowR = statsOld.shiftR / (statsOld.shiftSamples + kFlowSampleRegulariser);
+    result.flowRT = statsOld.shiftRT / (statsOld.shiftSamples + kFlowSampleRegulariser);
+    result.residuals = statsOld.numTerms;
+    result.inlierRatio =
+        statsOld.numTerms > 0 ? 1. - static_cast<double>(statsOld.numAboveBaseCutoff) / statsOld.numTerms : 0.;
+    if (!std::isfinite(rmse) || !current.translation().allFinite()) {
+      return fail(CoarseTrackingStatus::notFinite, lvl);
+    }
+    if (abortRmse != nullptr && rmse > kAbortResidualFactor * (*abortRmse)[static_cast<size_t>(lvl)]) {
+      return fail(CoarseTrackingStatus::worseThanBound, lvl);
+    }
+    // DSO: a level that needed a larger cutoff is run once more (the pose is now better, the cutoff resets).
+    if (cutoffRepeat > 1.f && !haveRepeated) {
+      ++lvl;
+      haveRepeated = true;
+    }
+  }
+
+  if (1. - result.inlierRatio > kMaxSaturatedRatio) {
+    return fail(CoarseTrackingStatus::tooManyOutliers, 0);
+  }
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(m_refExposure, m_refAffine, exposure, currentAffine, aji, bji);
+  if (!(aji > 0.) || std::fabs(std::log(aji)) > kMaxLogGainChange || std::fabs(bji) > kMaxOffsetChange) {
+    return fail(CoarseTrackingStatus::implausibleBrightness, 0);
+  }
+  result.success = true;
+  result.status = CoarseTrackingStatus::ok;
+  result.newMref = current;
+  result.affine = currentAffine;
+  newMref = current;
+  affine = currentAffine;
+  return true;
+}
+} // namespace hslam
