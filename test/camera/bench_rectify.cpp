@@ -1,5 +1,7 @@
 // Per-frame cost of vpHSlamRectifier::rectify (8-bit and float) and the one-time cost of building the table.
 //   pinhole none 640x480 (plain copy), radtan crop 640x480, EuRoC radtan crop 752x480.
+#include "CameraTestFixtures.h"
+
 #include <visp3/hslam/vpHSlamCamera.h>
 #include <visp3/hslam/vpHSlamRectifier.h>
 
@@ -7,26 +9,12 @@
 
 #include <random>
 
+using hslam_test::eurocRadTan;
+using hslam_test::pinholeVga;
+using hslam_test::radTanVga;
+
 namespace
 {
-vpHSlamCamera pinholeVga()
-{
-  return vpHSlamCamera(vpHSlamCamera::pinhole, 640, 480, 525.0, 524.0, 319.5, 239.5);
-}
-
-vpHSlamCamera radTanVga()
-{
-  // EuRoC's distortion on a VGA sensor.
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 640, 480, 458.654, 457.296, 319.5, 239.5,
-                       {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
-}
-
-vpHSlamCamera eurocRadTan()
-{
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 752, 480, 458.654, 457.296, 367.215, 248.375,
-                       {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
-}
-
 vpHSlamCamera cameraOf(int which)
 {
   switch (which) {

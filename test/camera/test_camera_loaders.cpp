@@ -10,14 +10,16 @@
 #include <visp3/core/vpXmlParserCamera.h>
 
 #include "HSlamTestData.h"
-#include "camera/TextParsing.h"
+#include "HSlamTestErrors.h"
+#include "common/TextParsing.h"
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <string>
 #include <unistd.h>
+
+using hslam_test::expectHSlamError;
 
 namespace
 {
@@ -55,26 +57,6 @@ private:
   std::string m_path;
 };
 
-// Runs f and checks it throws vpHSlamException with \e code and a message containing each of \e mustContain.
-void expectError(const std::function<void()> &f, vpHSlamException::ErrorCode code,
-                 const std::vector<std::string> &mustContain)
-{
-  try {
-    f();
-    ADD_FAILURE() << "no exception, expected code " << code;
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), code) << e.getStringMessage();
-    for (const std::string &s : mustContain) {
-      EXPECT_NE(e.getStringMessage().find(s), std::string::npos)
-          << "message '" << e.getStringMessage() << "' lacks '" << s << "'";
-    }
-  } catch (const std::exception &e) {
-    ADD_FAILURE() << "std::exception instead of vpHSlamException: " << e.what();
-  } catch (...) {
-    ADD_FAILURE() << "unknown exception instead of vpHSlamException";
-  }
-}
-
 void expectIntrinsics(const vpHSlamCamera &cam, unsigned int w, unsigned int h, double fx, double fy, double cx,
                       double cy)
 {
@@ -92,6 +74,14 @@ void expectDistortion(const vpHSlamCamera &cam, const std::vector<double> &expec
   for (std::size_t i = 0; i < expected.size(); ++i) {
     EXPECT_NEAR(cam.getDistortion()[i], expected[i], kTol) << "coefficient " << i;
   }
+}
+
+void expectRectification(const vpHSlamCamera &cam, vpHSlamCamera::RectificationMode mode, unsigned int w,
+                         unsigned int h)
+{
+  EXPECT_EQ(cam.getRectificationMode(), mode);
+  EXPECT_EQ(cam.getRectifiedWidth(), w);
+  EXPECT_EQ(cam.getRectifiedHeight(), h);
 }
 } // namespace
 
@@ -111,9 +101,7 @@ TEST(CameraLoaders, sevenScenesTxtAndXmlAgree)
     EXPECT_EQ(cam->getModel(), vpHSlamCamera::pinhole);
     expectIntrinsics(*cam, 640, 480, 525, 525, 320, 240);
     EXPECT_TRUE(cam->getDistortion().empty());
-    EXPECT_EQ(cam->getRectificationMode(), vpHSlamCamera::rectifyNone);
-    EXPECT_EQ(cam->getRectifiedWidth(), 640u);
-    EXPECT_EQ(cam->getRectifiedHeight(), 480u);
+    expectRectification(*cam, vpHSlamCamera::rectifyNone, 640, 480);
   }
   // load() picks the reader from the name.
   expectIntrinsics(vpHSlamCamera::load(txt), 640, 480, 525, 525, 320, 240);
@@ -141,9 +129,9 @@ TEST(CameraLoaders, kittiCalib)
                    183.1104);
   // load() recognises the P0 line; the size is required.
   expectIntrinsics(vpHSlamCamera::load(calib, 1226, 370), 1226, 370, 707.0912, 707.0912, 601.8873, 183.1104);
-  expectError([&] { vpHSlamCamera::load(calib); }, vpHSlamException::invalidArgument, {calib});
-  expectError([&] { vpHSlamCamera::loadKittiCalib(calib, 1226, 370, "P7"); }, vpHSlamException::parseError,
-              {calib, "P7:"});
+  expectHSlamError([&] { vpHSlamCamera::load(calib); }, vpHSlamException::invalidArgument, {calib});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(calib, 1226, 370, "P7"); }, vpHSlamException::parseError,
+                   {calib, "P7:"});
 }
 
 TEST(CameraLoaders, eurocSensorYaml)
@@ -153,9 +141,7 @@ TEST(CameraLoaders, eurocSensorYaml)
     EXPECT_EQ(cam.getModel(), vpHSlamCamera::radialTangential);
     expectIntrinsics(cam, 752, 480, 458.654, 457.296, 367.215, 248.375);
     expectDistortion(cam, {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
-    EXPECT_EQ(cam.getRectificationMode(), vpHSlamCamera::rectifyCrop);
-    EXPECT_EQ(cam.getRectifiedWidth(), 752u);
-    EXPECT_EQ(cam.getRectifiedHeight(), 480u);
+    expectRectification(cam, vpHSlamCamera::rectifyCrop, 752, 480);
   }
 }
 
@@ -178,9 +164,7 @@ TEST(CameraLoaders, dsoEachModel)
     EXPECT_EQ(cam.getModel(), vpHSlamCamera::radialTangential);
     expectIntrinsics(cam, 752, 480, 458.654, 457.296, 367.215, 248.375);
     expectDistortion(cam, {-0.28, 0.07, 0.0002, 1.8e-05});
-    EXPECT_EQ(cam.getRectificationMode(), vpHSlamCamera::rectifyCrop); // default for distorted models
-    EXPECT_EQ(cam.getRectifiedWidth(), 752u);
-    EXPECT_EQ(cam.getRectifiedHeight(), 480u);
+    expectRectification(cam, vpHSlamCamera::rectifyCrop, 752, 480); // default for distorted models
   }
   for (const char *keyword : {"EquiDistant", "KannalaBrandt"}) {
     const vpHSlamCamera cam = vpHSlamCamera::loadDso(dir.write(
@@ -212,9 +196,7 @@ TEST(CameraLoaders, dsoRelativeIntrinsics)
   EXPECT_EQ(tum.getModel(), vpHSlamCamera::fov);
   expectIntrinsics(tum, 1280, 1024, 0.349153 * 1280, 0.436593 * 1024, 0.49314 * 1280 - 0.5, 0.499021 * 1024 - 0.5);
   expectDistortion(tum, {0.933271});
-  EXPECT_EQ(tum.getRectificationMode(), vpHSlamCamera::rectifyCrop);
-  EXPECT_EQ(tum.getRectifiedWidth(), 640u);
-  EXPECT_EQ(tum.getRectifiedHeight(), 480u);
+  expectRectification(tum, vpHSlamCamera::rectifyCrop, 640, 480);
 
   // cx >= 1: absolute, untouched even when fx < 1 would look relative on its own.
   expectIntrinsics(vpHSlamCamera::loadDso(dir.write("abs.txt", "Pinhole 0.9 0.9 1.5 0.5 0\n640 480\n")), 640, 480, 0.9,
@@ -249,20 +231,14 @@ TEST(CameraLoaders, dsoRectificationLines)
   const std::string radtan = "RadTan 458.654 457.296 367.215 248.375 -0.28 0.07 0.0002 1.8e-05\n752 480\n";
 
   const vpHSlamCamera full = vpHSlamCamera::loadDso(dir.write("full.txt", radtan + "full\n640 400\n"));
-  EXPECT_EQ(full.getRectificationMode(), vpHSlamCamera::rectifyFull);
-  EXPECT_EQ(full.getRectifiedWidth(), 640u);
-  EXPECT_EQ(full.getRectifiedHeight(), 400u);
+  expectRectification(full, vpHSlamCamera::rectifyFull, 640, 400);
 
   const vpHSlamCamera crop = vpHSlamCamera::loadDso(dir.write("crop.txt", radtan + "crop\n"));
-  EXPECT_EQ(crop.getRectificationMode(), vpHSlamCamera::rectifyCrop);
-  EXPECT_EQ(crop.getRectifiedWidth(), 752u); // no fourth line: input size
-  EXPECT_EQ(crop.getRectifiedHeight(), 480u);
+  expectRectification(crop, vpHSlamCamera::rectifyCrop, 752, 480); // no fourth line: input size
 
   // Explicit and relative: scaled by the OUTPUT size, -0.5 on the principal point (DSO).
   const vpHSlamCamera rel = vpHSlamCamera::loadDso(dir.write("rel.txt", radtan + "0.4 0.6 0.5 0.5 0\n640 480\n"));
-  EXPECT_EQ(rel.getRectificationMode(), vpHSlamCamera::rectifyExplicit);
-  EXPECT_EQ(rel.getRectifiedWidth(), 640u);
-  EXPECT_EQ(rel.getRectifiedHeight(), 480u);
+  expectRectification(rel, vpHSlamCamera::rectifyExplicit, 640, 480);
   const vpCameraParameters &K = rel.getExplicitRectifiedIntrinsics();
   EXPECT_NEAR(K.get_px(), 256.0, kTol);
   EXPECT_NEAR(K.get_py(), 288.0, kTol);
@@ -283,8 +259,8 @@ TEST(CameraLoaders, dsoBrokenFiles)
   TempDir dir;
   ASSERT_TRUE(dir.ok());
   const std::string missing = dir.path("absent_camera.txt");
-  expectError([&] { vpHSlamCamera::loadDso(missing); }, vpHSlamException::fileNotFound, {missing});
-  expectError([&] { vpHSlamCamera::load(missing); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::loadDso(missing); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::load(missing); }, vpHSlamException::fileNotFound, {missing});
 
   struct Case {
     const char *name;
@@ -320,11 +296,11 @@ TEST(CameraLoaders, dsoBrokenFiles)
   for (const Case &c : cases) {
     SCOPED_TRACE(c.name);
     const std::string path = dir.write(c.name, c.content);
-    expectError([&] { vpHSlamCamera::loadDso(path); }, c.code, {path + c.where});
-    expectError([&] { vpHSlamCamera::load(path); }, c.code, {path});
+    expectHSlamError([&] { vpHSlamCamera::loadDso(path); }, c.code, {path + c.where});
+    expectHSlamError([&] { vpHSlamCamera::load(path); }, c.code, {path});
   }
   // A folder is not a file.
-  expectError([&] { vpHSlamCamera::loadDso(dir.path("")); }, vpHSlamException::fileUnreadable, {dir.path("")});
+  expectHSlamError([&] { vpHSlamCamera::loadDso(dir.path("")); }, vpHSlamException::fileUnreadable, {dir.path("")});
 }
 
 // ---------------------------------------------------------------------------------------------- KITTI
@@ -336,21 +312,24 @@ TEST(CameraLoaders, kittiBrokenFiles)
   const std::string p0 = "P0: 7.0e+02 0 6.0e+02 0 0 7.0e+02 1.8e+02 0 0 0 1 0\n";
   const std::string good = dir.write("calib.txt", p0);
   expectIntrinsics(vpHSlamCamera::loadKittiCalib(good, 1226, 370), 1226, 370, 700, 700, 600, 180);
-  expectError([&] { vpHSlamCamera::loadKittiCalib(good, 0, 370); }, vpHSlamException::invalidArgument, {good});
-  expectError([&] { vpHSlamCamera::loadKittiCalib(good, 1226, 0); }, vpHSlamException::invalidArgument, {good});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(good, 0, 370); }, vpHSlamException::invalidArgument, {good});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(good, 1226, 0); }, vpHSlamException::invalidArgument, {good});
   const std::string missing = dir.path("nocalib.txt");
-  expectError([&] { vpHSlamCamera::loadKittiCalib(missing, 1226, 370); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(missing, 1226, 370); }, vpHSlamException::fileNotFound,
+                   {missing});
 
   const std::string shortLine = dir.write("short.txt", "P0: 7.0e+02 0 6.0e+02 0 0 7.0e+02 1.8e+02 0 0 0 1\n");
-  expectError([&] { vpHSlamCamera::loadKittiCalib(shortLine, 1226, 370); }, vpHSlamException::parseError,
-              {shortLine + ":1"});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(shortLine, 1226, 370); }, vpHSlamException::parseError,
+                   {shortLine + ":1"});
   const std::string text = dir.write("text.txt", "P1: 1 2 3\nP0: 7.0e+02 0 6.0e+02 0 0 fx 1.8e+02 0 0 0 1 0\n");
-  expectError([&] { vpHSlamCamera::loadKittiCalib(text, 1226, 370); }, vpHSlamException::parseError, {text + ":2"});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(text, 1226, 370); }, vpHSlamException::parseError,
+                   {text + ":2"});
   const std::string noP0 = dir.write("nop0.txt", "P1: 7.0e+02 0 6.0e+02 0 0 7.0e+02 1.8e+02 0 0 0 1 0\n");
-  expectError([&] { vpHSlamCamera::loadKittiCalib(noP0, 1226, 370); }, vpHSlamException::parseError, {noP0, "P0:"});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(noP0, 1226, 370); }, vpHSlamException::parseError,
+                   {noP0, "P0:"});
   const std::string skew = dir.write("skew.txt", "P0: 7.0e+02 3 6.0e+02 0 0 7.0e+02 1.8e+02 0 0 0 1 0\n");
-  expectError([&] { vpHSlamCamera::loadKittiCalib(skew, 1226, 370); }, vpHSlamException::invalidCalibration,
-              {skew + ":1"});
+  expectHSlamError([&] { vpHSlamCamera::loadKittiCalib(skew, 1226, 370); }, vpHSlamException::invalidCalibration,
+                   {skew + ":1"});
 }
 
 // ---------------------------------------------------------------------------------------------- YAML
@@ -384,7 +363,7 @@ TEST(CameraLoaders, yamlVariantsAndErrors)
   expectDistortion(kalibr, {0.0034, 0.0007, -0.0020, 0.0002});
 
   const std::string missing = dir.path("absent.yaml");
-  expectError([&] { vpHSlamCamera::loadEurocYaml(missing); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::loadEurocYaml(missing); }, vpHSlamException::fileNotFound, {missing});
   struct Case {
     const char *name;
     std::string content;
@@ -409,7 +388,7 @@ TEST(CameraLoaders, yamlVariantsAndErrors)
   for (const Case &c : cases) {
     SCOPED_TRACE(c.name);
     const std::string path = dir.write(c.name, c.content);
-    expectError([&] { vpHSlamCamera::loadEurocYaml(path); }, c.code, {path});
+    expectHSlamError([&] { vpHSlamCamera::loadEurocYaml(path); }, c.code, {path});
   }
 }
 
@@ -492,27 +471,29 @@ TEST(CameraLoaders, vispXmlSizesAndErrors)
                                                          model + "  </camera>\n</root>\n");
   // Size not stored: taken from the arguments, required.
   expectIntrinsics(vpHSlamCamera::loadViSPXml(nosize, "", 320, 240), 320, 240, 300, 300, 160, 120);
-  expectError([&] { vpHSlamCamera::loadViSPXml(nosize); }, vpHSlamException::invalidArgument, {nosize});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(nosize); }, vpHSlamException::invalidArgument, {nosize});
 
   const std::string sized = dir.write("sized.xml", "<?xml version=\"1.0\"?>\n<root>\n  <camera>\n"
                                                    "    <name>cam</name>\n    <image_width>320</image_width>\n"
                                                    "    <image_height>240</image_height>\n" +
                                                        model + "  </camera>\n</root>\n");
   expectIntrinsics(vpHSlamCamera::loadViSPXml(sized, "cam", 320, 240), 320, 240, 300, 300, 160, 120);
-  expectError([&] { vpHSlamCamera::loadViSPXml(sized, "", 640, 480); }, vpHSlamException::invalidArgument,
-              {sized, "640x480"});
-  expectError([&] { vpHSlamCamera::loadViSPXml(sized, "other"); }, vpHSlamException::invalidArgument, {sized, "other"});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(sized, "", 640, 480); }, vpHSlamException::invalidArgument,
+                   {sized, "640x480"});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(sized, "other"); }, vpHSlamException::invalidArgument,
+                   {sized, "other"});
 
   const std::string missing = dir.path("absent.xml");
-  expectError([&] { vpHSlamCamera::loadViSPXml(missing); }, vpHSlamException::fileNotFound, {missing});
-  expectError([&] { vpHSlamCamera::load(missing); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(missing); }, vpHSlamException::fileNotFound, {missing});
+  expectHSlamError([&] { vpHSlamCamera::load(missing); }, vpHSlamException::fileNotFound, {missing});
 
   const std::string nocam = dir.write("nocam.xml", "<?xml version=\"1.0\"?>\n<root>\n</root>\n");
-  expectError([&] { vpHSlamCamera::loadViSPXml(nocam); }, vpHSlamException::parseError, {nocam});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(nocam); }, vpHSlamException::parseError, {nocam});
   const std::string badtype =
       dir.write("badtype.xml", "<?xml version=\"1.0\"?>\n<root>\n  <camera>\n    <model>\n      <type>mei</type>\n"
                                "    </model>\n  </camera>\n</root>\n");
-  expectError([&] { vpHSlamCamera::loadViSPXml(badtype, "", 320, 240); }, vpHSlamException::unsupported, {badtype});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(badtype, "", 320, 240); }, vpHSlamException::unsupported,
+                   {badtype});
   const std::string nopx =
       dir.write("nopx.xml", "<?xml version=\"1.0\"?>\n<root>\n  <camera>\n    <image_width>320</image_width>\n"
                             "    <image_height>240</image_height>\n    <model>\n"
@@ -520,12 +501,12 @@ TEST(CameraLoaders, vispXmlSizesAndErrors)
                             "      <u0>160</u0>\n      <v0>120</v0>\n    </model>\n  </camera>\n</root>\n");
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
-  expectError([&] { vpHSlamCamera::loadViSPXml(nopx); }, vpHSlamException::parseError, {nopx});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(nopx); }, vpHSlamException::parseError, {nopx});
   EXPECT_EQ(testing::internal::GetCapturedStdout() + testing::internal::GetCapturedStderr(), "");
   const std::string badwidth = dir.write("badwidth.xml", "<?xml version=\"1.0\"?>\n<root>\n  <camera>\n"
                                                          "    <image_width>wide</image_width>\n" +
                                                              model + "  </camera>\n</root>\n");
-  expectError([&] { vpHSlamCamera::loadViSPXml(badwidth); }, vpHSlamException::parseError, {badwidth + ":4"});
+  expectHSlamError([&] { vpHSlamCamera::loadViSPXml(badwidth); }, vpHSlamException::parseError, {badwidth + ":4"});
 }
 
 // ---------------------------------------------------------------------------------------------- text helpers
@@ -543,12 +524,12 @@ TEST(TextParsing, numbersAndTokens)
     EXPECT_FALSE(hslam::tryParseDouble(bad, v)) << "'" << bad << "'";
   }
   EXPECT_EQ(hslam::parseUnsigned("640", "f.txt", 2, "width"), 640u);
-  expectError([] { hslam::parseUnsigned("-3", "f.txt", 2, "width"); }, vpHSlamException::parseError,
-              {"f.txt:2", "width", "-3"});
-  expectError([] { hslam::parseUnsigned("99999999999", "f.txt", 2, "width"); }, vpHSlamException::parseError,
-              {"f.txt:2"});
-  expectError([] { hslam::parseDouble("x1", "g.csv", 17, "timestamp"); }, vpHSlamException::parseError,
-              {"g.csv:17", "timestamp", "'x1'"});
+  expectHSlamError([] { hslam::parseUnsigned("-3", "f.txt", 2, "width"); }, vpHSlamException::parseError,
+                   {"f.txt:2", "width", "-3"});
+  expectHSlamError([] { hslam::parseUnsigned("99999999999", "f.txt", 2, "width"); }, vpHSlamException::parseError,
+                   {"f.txt:2"});
+  expectHSlamError([] { hslam::parseDouble("x1", "g.csv", 17, "timestamp"); }, vpHSlamException::parseError,
+                   {"g.csv:17", "timestamp", "'x1'"});
 
   const std::vector<std::string> tokens = hslam::splitWhitespace("  a\tbb   c \r");
   ASSERT_EQ(tokens.size(), 3u);
@@ -559,6 +540,6 @@ TEST(TextParsing, numbersAndTokens)
   EXPECT_EQ(fields[1], "a.png");
   EXPECT_EQ(fields[2], "");
   EXPECT_EQ(fields[3], "x");
-  expectError([&] { hslam::expectTokenCount(tokens, 4, "h.txt", 9, "pose"); }, vpHSlamException::parseError,
-              {"h.txt:9", "expected 4", "found 3"});
+  expectHSlamError([&] { hslam::expectTokenCount(tokens, 4, "h.txt", 9, "pose"); }, vpHSlamException::parseError,
+                   {"h.txt:9", "expected 4", "found 3"});
 }

@@ -1,5 +1,6 @@
 // Geometric camera models: round trips over the whole image, Jacobians against numeric differences, agreement
 // with OpenCV's projectPoints / fisheye::projectPoints, and calibration validation.
+#include "CameraTestFixtures.h"
 #include "HSlamTestData.h"
 
 #include "camera/CameraModel.h"
@@ -18,6 +19,12 @@
 #include <memory>
 #include <random>
 
+using hslam_test::eurocRadTan;
+using hslam_test::pinholeVga;
+using hslam_test::radTanK3;
+using hslam_test::tumMonoFov;
+using hslam_test::tumViEquidistant;
+
 namespace
 {
 constexpr double kPi = 3.14159265358979323846;
@@ -28,58 +35,29 @@ constexpr double kNumericStep = 1e-6;    // central differences, relative to |p|
 constexpr double kJacobianRelTol = 1e-5; // numeric vs analytic Jacobian, relative to the largest entry
 constexpr int kRandomPoints = 2000;
 
-vpHSlamCamera eurocRadTan()
-{
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 752, 480, 458.654, 457.296, 367.215, 248.375,
-                       {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
-}
-
-vpHSlamCamera radTanK3()
-{
-  // A 5-parameter calibration (k3 != 0) at VGA, to exercise the k3 path.
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 640, 480, 520.9, 521.0, 325.1, 249.7,
-                       {0.2312, -0.7849, -0.0033, -0.0001, 0.9172});
-}
-
-vpHSlamCamera tumViEquidistant()
-{
-  return vpHSlamCamera(vpHSlamCamera::equidistant, 512, 512, 190.97, 190.98, 254.93, 256.90,
-                       {0.0034823894, 0.000715034, -0.0020532361, 0.000202936});
-}
-
-vpHSlamCamera tumMonoFov()
-{
-  return vpHSlamCamera(vpHSlamCamera::fov, 1280, 1024, 0.349 * 1280, 0.4655 * 1024, 0.4933 * 1280, 0.5 * 1024,
-                       {0.9320});
-}
-
-vpHSlamCamera pinholeVga()
-{
-  return vpHSlamCamera(vpHSlamCamera::pinhole, 640, 480, 525.0, 524.0, 319.5, 239.5);
-}
-
 struct RoundTripStats {
   unsigned int tested = 0;
   unsigned int unprojected = 0;
   double maxErrorPx = 0.0;
 };
 
-// pixel -> ray -> pixel over the image grid; also checks the ray has unit norm.
-RoundTripStats pixelRoundTrip(const hslam::CameraModel &model, unsigned int width, unsigned int height)
+// pixel -> ray -> pixel over the image grid of the camera's model; also checks the ray has unit norm.
+RoundTripStats pixelRoundTrip(const vpHSlamCamera &cam)
 {
+  const auto model = hslam::makeCameraModel(cam);
   RoundTripStats s;
-  for (unsigned int v = 0; v < height; v += kGridStep) {
-    for (unsigned int u = 0; u < width; u += kGridStep) {
+  for (unsigned int v = 0; v < cam.getHeight(); v += kGridStep) {
+    for (unsigned int u = 0; u < cam.getWidth(); u += kGridStep) {
       ++s.tested;
       const Eigen::Vector2d uv(u, v);
       Eigen::Vector3d ray;
-      if (!model.unproject(uv, ray)) {
+      if (!model->unproject(uv, ray)) {
         continue;
       }
       ++s.unprojected;
       EXPECT_NEAR(ray.norm(), 1.0, 1e-12);
       Eigen::Vector2d back;
-      if (!model.project(ray, back)) {
+      if (!model->project(ray, back)) {
         ADD_FAILURE() << "pixel (" << u << ", " << v << ") unprojects but its ray does not project";
         continue;
       }
@@ -136,7 +114,7 @@ TEST(CameraModels, PinholeRoundTripWholeImage)
 {
   const vpHSlamCamera cam = pinholeVga();
   const auto model = hslam::makeCameraModel(cam);
-  const RoundTripStats s = pixelRoundTrip(*model, cam.getWidth(), cam.getHeight());
+  const RoundTripStats s = pixelRoundTrip(cam);
   EXPECT_EQ(s.unprojected, s.tested);
   EXPECT_LT(s.maxErrorPx, kRoundTripTolPx);
   Eigen::Vector2d uv;
@@ -146,8 +124,7 @@ TEST(CameraModels, PinholeRoundTripWholeImage)
 TEST(CameraModels, RadTanEurocRoundTripWholeImage)
 {
   const vpHSlamCamera cam = eurocRadTan();
-  const auto model = hslam::makeCameraModel(cam);
-  const RoundTripStats s = pixelRoundTrip(*model, cam.getWidth(), cam.getHeight());
+  const RoundTripStats s = pixelRoundTrip(cam);
   EXPECT_EQ(s.unprojected, s.tested) << "every EuRoC pixel lies in the monotonic domain";
   EXPECT_LT(s.maxErrorPx, kRoundTripTolPx);
 }
@@ -155,8 +132,7 @@ TEST(CameraModels, RadTanEurocRoundTripWholeImage)
 TEST(CameraModels, RadTanK3RoundTripWholeImage)
 {
   const vpHSlamCamera cam = radTanK3();
-  const auto model = hslam::makeCameraModel(cam);
-  const RoundTripStats s = pixelRoundTrip(*model, cam.getWidth(), cam.getHeight());
+  const RoundTripStats s = pixelRoundTrip(cam);
   EXPECT_EQ(s.unprojected, s.tested);
   EXPECT_LT(s.maxErrorPx, kRoundTripTolPx);
 }
@@ -165,7 +141,7 @@ TEST(CameraModels, EquidistantTumViRoundTripWholeImage)
 {
   const vpHSlamCamera cam = tumViEquidistant();
   const auto model = hslam::makeCameraModel(cam);
-  const RoundTripStats s = pixelRoundTrip(*model, cam.getWidth(), cam.getHeight());
+  const RoundTripStats s = pixelRoundTrip(cam);
   EXPECT_EQ(s.unprojected, s.tested) << "TUM-VI corners see beyond 90 degrees but stay in the domain";
   EXPECT_LT(s.maxErrorPx, kRoundTripTolPx);
   // The corners of this lens look behind the image plane: rays with z < 0 must exist and round-trip.
@@ -177,8 +153,7 @@ TEST(CameraModels, EquidistantTumViRoundTripWholeImage)
 TEST(CameraModels, FovTumMonoRoundTripWholeImage)
 {
   const vpHSlamCamera cam = tumMonoFov();
-  const auto model = hslam::makeCameraModel(cam);
-  const RoundTripStats s = pixelRoundTrip(*model, cam.getWidth(), cam.getHeight());
+  const RoundTripStats s = pixelRoundTrip(cam);
   EXPECT_LT(s.maxErrorPx, kRoundTripTolPx);
   // Independent count of the pixels inside the FOV model's 90 degree horizon: r_d * omega < pi / 2.
   const double omega = cam.getDistortion()[0];

@@ -1,6 +1,7 @@
 // Photometric calibration: identity without files, exact irradiance from known G and V (8- and 16-bit vignettes),
 // and the error code plus file name for every kind of malformed input.
 #include "HSlamTestData.h"
+#include "HSlamTestErrors.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamPhotometricCalibration.h>
@@ -14,10 +15,11 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <limits>
 #include <sstream>
 #include <unistd.h>
+
+using hslam_test::expectHSlamError;
 
 namespace
 {
@@ -71,21 +73,6 @@ unsigned short vignette16(unsigned int u, unsigned int v)
 {
   const int du = static_cast<int>(u) - 16, dv = static_cast<int>(v) - 12;
   return static_cast<unsigned short>(65000 - 37 * (du * du + dv * dv));
-}
-
-void expectHSlamError(const std::function<void()> &call, vpHSlamException::ErrorCode code,
-                      const std::vector<std::string> &mustContain)
-{
-  try {
-    call();
-    ADD_FAILURE() << "no exception thrown, expected code " << code;
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), static_cast<int>(code)) << e.getStringMessage();
-    for (const std::string &part : mustContain) {
-      EXPECT_NE(e.getStringMessage().find(part), std::string::npos)
-          << "message '" << e.getStringMessage() << "' lacks '" << part << "'";
-    }
-  }
 }
 
 class PhotometricCalibrationTest : public ::testing::Test

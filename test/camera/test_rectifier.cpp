@@ -1,6 +1,7 @@
 // vpHSlamRectifier: a synthetic pattern rendered through each distortion model must come back where the target
 // pinhole camera puts it; crop has no invalid pixel and is tight; full keeps every input pixel; the pinhole/none
 // case is the identity; misuse throws.
+#include "CameraTestFixtures.h"
 #include "HSlamTestData.h"
 
 #include "camera/CameraModel.h"
@@ -13,6 +14,12 @@
 #include <iostream>
 #include <random>
 #include <vector>
+
+using hslam_test::eurocRadTan;
+using hslam_test::pincushionRadTan;
+using hslam_test::pinholeVga;
+using hslam_test::tumMonoFov;
+using hslam_test::tumViEquidistant;
 
 namespace
 {
@@ -28,36 +35,6 @@ constexpr double kCentroidTolInputPx = 0.05;
 constexpr double kCentroidTolPx = 0.1;
 constexpr unsigned int kMinBlobsChecked = 16;
 constexpr double kPointTolPx = 1e-6;
-
-vpHSlamCamera eurocRadTan()
-{
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 752, 480, 458.654, 457.296, 367.215, 248.375,
-                       {-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05});
-}
-
-vpHSlamCamera pincushionRadTan()
-{
-  // k1 > 0: the valid region is barrel-shaped, so the crop must shrink from the centre lines.
-  return vpHSlamCamera(vpHSlamCamera::radialTangential, 640, 480, 500.0, 500.0, 330.0, 235.0,
-                       {0.12, 0.02, 0.001, -0.0005});
-}
-
-vpHSlamCamera tumViEquidistant()
-{
-  return vpHSlamCamera(vpHSlamCamera::equidistant, 512, 512, 190.97, 190.98, 254.93, 256.90,
-                       {0.0034823894, 0.000715034, -0.0020532361, 0.000202936});
-}
-
-vpHSlamCamera tumMonoFov()
-{
-  return vpHSlamCamera(vpHSlamCamera::fov, 1280, 1024, 0.349 * 1280, 0.4655 * 1024, 0.4933 * 1280, 0.5 * 1024,
-                       {0.9320});
-}
-
-vpHSlamCamera pinholeVga()
-{
-  return vpHSlamCamera(vpHSlamCamera::pinhole, 640, 480, 525.0, 524.0, 319.5, 239.5);
-}
 
 vpHSlamCamera withMode(vpHSlamCamera cam, vpHSlamCamera::RectificationMode mode)
 {

@@ -43,11 +43,11 @@ inline std::string vispImagesDir()
 } // namespace hslam_test
 
 //! Declares `const std::string var` holding the path of a shared sequence, or skips the test with a message.
-#define HSLAM_REQUIRE_SHARED_DATA(var, relative)                                                                     \
-  const std::string var = hslam_test::sharedData(relative);                                                          \
-  if (var.empty()) {                                                                                                 \
-    GTEST_SKIP() << "shared data '" << relative << "' not found under " << hslam_test::sharedDataDir()               \
-                 << " (set HSLAM_SHARED_DATA_DIR to run this test)";                                                 \
+#define HSLAM_REQUIRE_SHARED_DATA(var, relative)                                                                       \
+  const std::string var = hslam_test::sharedData(relative);                                                            \
+  if (var.empty()) {                                                                                                   \
+    GTEST_SKIP() << "shared data '" << relative << "' not found under " << hslam_test::sharedDataDir()                 \
+                 << " (set HSLAM_SHARED_DATA_DIR to run this test)";                                                   \
   }
 
 #endif

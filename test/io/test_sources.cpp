@@ -1,6 +1,7 @@
 // Image sources: each reader on the shared sequences, auto-detection, and error reporting on broken copies made
 // in a temporary folder (never in the repository).
 #include "HSlamTestData.h"
+#include "HSlamTestErrors.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
@@ -15,12 +16,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 namespace fs = std::filesystem;
+using hslam_test::expectHSlamError;
 
 namespace
 {
@@ -67,19 +68,6 @@ std::vector<std::string> readLines(const std::string &path)
     lines.push_back(line);
   }
   return lines;
-}
-
-//! Runs \e f, expects a vpHSlamException with \e code whose message contains \e needle.
-void expectError(const std::function<void()> &f, vpHSlamException::ErrorCode code, const std::string &needle)
-{
-  try {
-    f();
-    ADD_FAILURE() << "no exception; expected code " << code << " mentioning '" << needle << "'";
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), code) << e.getStringMessage();
-    EXPECT_NE(e.getStringMessage().find(needle), std::string::npos)
-        << "message '" << e.getStringMessage() << "' does not mention '" << needle << "'";
-  }
 }
 
 //! Reads every frame; returns their metadata and checks size and order on the way.
@@ -132,6 +120,27 @@ std::string makeRgbdCopy(const TempDir &tmp, const std::string &seq, unsigned in
   writeText(dst + "/rgb.txt", list.str());
   return dst;
 }
+
+/*!
+  An EuRoC layout under \e tmp (mav0/cam0) holding the sensor.yaml, header and first \e n frames of the EuRoC
+  sequence (only those files). Returns the data.csv text written; \e lines receives every line of the original.
+*/
+std::string makeEurocCopy(const TempDir &tmp, const std::string &seq, std::size_t n, std::vector<std::string> &lines)
+{
+  const std::string cam = tmp / "mav0/cam0";
+  copyFile(seq + "/mav0/cam0/sensor.yaml", cam + "/sensor.yaml");
+  lines = readLines(seq + "/mav0/cam0/data.csv");
+  std::ostringstream csv;
+  for (std::size_t i = 0; i <= n; ++i) {
+    csv << lines[i] << "\n";
+    if (i > 0) {
+      const std::string name = lines[i].substr(lines[i].find(',') + 1);
+      copyFile(seq + "/mav0/cam0/data/" + name, cam + "/data/" + name);
+    }
+  }
+  writeText(cam + "/data.csv", csv.str());
+  return csv.str();
+}
 } // namespace
 
 TEST(ImageSourceFormats, NamesRoundTrip)
@@ -141,7 +150,7 @@ TEST(ImageSourceFormats, NamesRoundTrip)
     EXPECT_EQ(vpHSlamImageSource::parseFormat(vpHSlamImageSource::formatName(format)), format);
   }
   EXPECT_EQ(vpHSlamImageSource::formatName(vpHSlamImageSource::formatTumMono), "tum-mono");
-  expectError([] { vpHSlamImageSource::parseFormat("tum"); }, vpHSlamException::invalidArgument, "tum");
+  expectHSlamError([] { vpHSlamImageSource::parseFormat("tum"); }, vpHSlamException::invalidArgument, {"tum"});
   EXPECT_EQ(vpHSlamImageSource::detectFormat("/dev/video0"), vpHSlamImageSource::formatV4l2);
   EXPECT_EQ(vpHSlamImageSource::detectFormat("seq/img_%04d.png"), vpHSlamImageSource::formatImages);
   EXPECT_EQ(vpHSlamImageSource::detectFormat("/nonexistent/hslam/folder"), vpHSlamImageSource::formatAuto);
@@ -149,14 +158,15 @@ TEST(ImageSourceFormats, NamesRoundTrip)
 
 TEST(ImageSourceFormats, MissingOrUnknownInput)
 {
-  expectError([] { vpHSlamImageSource::create("/nonexistent/hslam/folder"); }, vpHSlamException::fileNotFound,
-              "/nonexistent/hslam/folder");
+  expectHSlamError([] { vpHSlamImageSource::create("/nonexistent/hslam/folder"); }, vpHSlamException::fileNotFound,
+                   {"/nonexistent/hslam/folder"});
   TempDir tmp;
   writeText(tmp / "notes.txt", "nothing to see\n");
-  expectError([&] { vpHSlamImageSource::create(tmp.path); }, vpHSlamException::unsupported, tmp.path);
+  expectHSlamError([&] { vpHSlamImageSource::create(tmp.path); }, vpHSlamException::unsupported, {tmp.path});
   vpHSlamImageSource::Options options;
   options.format = vpHSlamImageSource::formatKitti;
-  expectError([&] { vpHSlamImageSource::create(tmp / "missing", options); }, vpHSlamException::fileNotFound, "missing");
+  expectHSlamError([&] { vpHSlamImageSource::create(tmp / "missing", options); }, vpHSlamException::fileNotFound,
+                   {"missing"});
 }
 
 TEST(ImageSourceShared, SevenScenesTumRgbd)
@@ -206,7 +216,7 @@ TEST(ImageSourceShared, KittiStartAndMaxFrames)
   EXPECT_NE(frames.front().name.find("000010.png"), std::string::npos) << frames.front().name;
   EXPECT_NE(frames.back().name.find("000014.png"), std::string::npos) << frames.back().name;
   options.startFrame = 51;
-  expectError([&] { vpHSlamImageSource::create(seq, options); }, vpHSlamException::invalidArgument, "51");
+  expectHSlamError([&] { vpHSlamImageSource::create(seq, options); }, vpHSlamException::invalidArgument, {"51"});
 }
 
 TEST(ImageSourceShared, EurocAsl)
@@ -244,60 +254,35 @@ TEST(ImageSourceBroken, MissingImageFile)
   TempDir tmp;
   const std::string copy = makeRgbdCopy(tmp, seq, 5);
   fs::remove(copy + "/rgb/000002.jpg");
-  expectError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::fileNotFound, "000002.jpg");
+  expectHSlamError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::fileNotFound, {"000002.jpg"});
 }
 
 TEST(ImageSourceBroken, TruncatedList)
 {
   HSLAM_REQUIRE_SHARED_DATA(seq, "euroc_V1_01_easy_first95");
   TempDir tmp;
-  const std::string cam = tmp / "mav0/cam0";
-  copyFile(seq + "/mav0/cam0/sensor.yaml", cam + "/sensor.yaml");
-  std::vector<std::string> lines = readLines(seq + "/mav0/cam0/data.csv");
-  std::ostringstream csv;
-  for (std::size_t i = 0; i < 5; ++i) {
-    csv << lines[i] << "\n";
-    if (i > 0) {
-      const std::string name = lines[i].substr(lines[i].find(',') + 1);
-      copyFile(seq + "/mav0/cam0/data/" + name, cam + "/data/" + name);
-    }
-  }
+  std::vector<std::string> lines;
+  const std::string csv = makeEurocCopy(tmp, seq, 4, lines);
   // A download cut in the middle of a line: stamp only, no file name.
-  csv << lines[5].substr(0, 12);
-  writeText(cam + "/data.csv", csv.str());
-  expectError([&] { vpHSlamImageSource::create(tmp.path); }, vpHSlamException::parseError, "data.csv:6");
+  writeText(tmp / "mav0/cam0/data.csv", csv + lines[5].substr(0, 12));
+  expectHSlamError([&] { vpHSlamImageSource::create(tmp.path); }, vpHSlamException::parseError, {"data.csv:6"});
 }
 
 TEST(ImageSourceBroken, CorruptImage)
 {
   HSLAM_REQUIRE_SHARED_DATA(seq, "euroc_V1_01_easy_first95");
   TempDir tmp;
-  const std::string cam = tmp / "mav0/cam0";
-  copyFile(seq + "/mav0/cam0/sensor.yaml", cam + "/sensor.yaml");
-  std::vector<std::string> lines = readLines(seq + "/mav0/cam0/data.csv");
-  std::ostringstream csv;
-  std::string corruptName;
-  for (std::size_t i = 0; i < 4; ++i) {
-    csv << lines[i] << "\n";
-    if (i == 0) {
-      continue;
-    }
-    const std::string name = lines[i].substr(lines[i].find(',') + 1);
-    if (i == 3) {
-      corruptName = name;
-      writeText(cam + "/data/" + name, std::string(4096, '\x5a') + "not a png");
-    } else {
-      copyFile(seq + "/mav0/cam0/data/" + name, cam + "/data/" + name);
-    }
-  }
-  writeText(cam + "/data.csv", csv.str());
+  std::vector<std::string> lines;
+  makeEurocCopy(tmp, seq, 3, lines);
+  const std::string corruptName = lines[3].substr(lines[3].find(',') + 1);
+  writeText(tmp / ("mav0/cam0/data/" + corruptName), std::string(4096, '\x5a') + "not a png");
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(tmp.path);
   ASSERT_EQ(source->getFrameCount(), 3);
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
   EXPECT_TRUE(source->acquire(I, frame));
   EXPECT_TRUE(source->acquire(I, frame));
-  expectError([&] { source->acquire(I, frame); }, vpHSlamException::fileUnreadable, corruptName);
+  expectHSlamError([&] { source->acquire(I, frame); }, vpHSlamException::fileUnreadable, {corruptName});
 }
 
 TEST(ImageSourceBroken, NonIncreasingTimestamps)
@@ -307,7 +292,7 @@ TEST(ImageSourceBroken, NonIncreasingTimestamps)
   const std::string copy = makeRgbdCopy(tmp, seq, 4);
   writeText(copy + "/rgb.txt", "# timestamp filename\n0.0 rgb/000000.jpg\n0.066667 rgb/000001.jpg\n"
                                "0.033333 rgb/000002.jpg\n0.1 rgb/000003.jpg\n");
-  expectError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::invalidTimestamps, "rgb.txt:4");
+  expectHSlamError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::invalidTimestamps, {"rgb.txt:4"});
 }
 
 TEST(ImageSourceBroken, KittiTimesAndImagesDiffer)
@@ -327,11 +312,11 @@ TEST(ImageSourceBroken, KittiTimesAndImagesDiffer)
     }
   }
   writeText(copy + "/times.txt", list.str());
-  expectError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::invalidTimestamps, "times.txt");
+  expectHSlamError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::invalidTimestamps, {"times.txt"});
   // The other way round: a time without its image names the missing file.
   list << times[4] << "\n" << times[5] << "\n";
   writeText(copy + "/times.txt", list.str());
-  expectError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::fileNotFound, "000005.png");
+  expectHSlamError([&] { vpHSlamImageSource::create(copy); }, vpHSlamException::fileNotFound, {"000005.png"});
 }
 
 TEST(ImageSourceBroken, ImageSizeDiffersFromCalibration)
@@ -343,7 +328,7 @@ TEST(ImageSourceBroken, ImageSizeDiffersFromCalibration)
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(copy);
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
-  expectError([&] { source->acquire(I, frame); }, vpHSlamException::invalidImage, "000000.jpg");
+  expectHSlamError([&] { source->acquire(I, frame); }, vpHSlamException::invalidImage, {"000000.jpg"});
 }
 
 namespace
@@ -408,7 +393,7 @@ TEST(ImageSourceSynthetic, TumMonoTimesAndImagesDiffer)
   TempDir tmp;
   const std::string dir = makeTumMono(tmp, 4);
   fs::remove(dir + "/images/00003.png");
-  expectError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::invalidTimestamps, "times.txt");
+  expectHSlamError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::invalidTimestamps, {"times.txt"});
 }
 
 TEST(ImageSourceSynthetic, TumMonoZipOnlyIsUnsupported)
@@ -418,7 +403,7 @@ TEST(ImageSourceSynthetic, TumMonoZipOnlyIsUnsupported)
   fs::remove_all(dir + "/images");
   writeText(dir + "/images.zip", "PK");
   EXPECT_EQ(vpHSlamImageSource::detectFormat(dir), vpHSlamImageSource::formatTumMono);
-  expectError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::unsupported, "unzip images.zip");
+  expectHSlamError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::unsupported, {"unzip images.zip"});
 }
 
 TEST(ImageSourceSynthetic, ImageFolderAndPattern)
@@ -429,7 +414,7 @@ TEST(ImageSourceSynthetic, ImageFolderAndPattern)
   vpHSlamImageSource::Options options;
   options.frameRate = 20.;
   // No camera file beside the images and none given: an error that says so.
-  expectError([&] { vpHSlamImageSource::create(images, options); }, vpHSlamException::fileNotFound, "camera");
+  expectHSlamError([&] { vpHSlamImageSource::create(images, options); }, vpHSlamException::fileNotFound, {"camera"});
 
   options.cameraFile = dir + "/camera.txt";
   EXPECT_EQ(vpHSlamImageSource::detectFormat(images), vpHSlamImageSource::formatImages);
@@ -458,7 +443,7 @@ TEST(ImageSourceSynthetic, ImageFolderAndPattern)
   vpHSlamImageSource::Frame frame;
   EXPECT_TRUE(broken->acquire(I, frame));
   EXPECT_TRUE(broken->acquire(I, frame));
-  expectError([&] { broken->acquire(I, frame); }, vpHSlamException::fileUnreadable, "00002.png");
+  expectHSlamError([&] { broken->acquire(I, frame); }, vpHSlamException::fileUnreadable, {"00002.png"});
 }
 
 TEST(ImageSourceSynthetic, VideoFile)
@@ -510,7 +495,7 @@ TEST(ImageSourceSynthetic, VideoFile)
   writeText(tmp / "camera.txt", "Pinhole 50 50 31.5 23.5 0\n640 480\nnone\n640 480\n");
   options.startFrame = 0;
   std::unique_ptr<vpHSlamImageSource> wrong = vpHSlamImageSource::create(video, options);
-  expectError([&] { wrong->acquire(I, frame); }, vpHSlamException::invalidImage, "clip.avi");
+  expectHSlamError([&] { wrong->acquire(I, frame); }, vpHSlamException::invalidImage, {"clip.avi"});
 }
 
 TEST(ImageSourceSynthetic, TumViExposuresFromDsoTimes)

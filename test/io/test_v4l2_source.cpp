@@ -2,6 +2,7 @@
 // answers libv4l2's calls for /dev/video-hslam-test with the PGM frames these tests write. Tests that need the
 // double skip when it is not interposed (not linked first, not preloaded); the error tests need no camera.
 #include "HSlamTestData.h"
+#include "HSlamTestErrors.h"
 
 #include "io/V4l2Source.h"
 
@@ -151,16 +152,8 @@ protected:
 void expectDeviceError(const std::string &device, const vpHSlamImageSource::Options &options,
                        const std::vector<std::string> &mentions)
 {
-  try {
-    hslam::createV4l2Source(device, options);
-    ADD_FAILURE() << "opening '" << device << "' did not throw";
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), vpHSlamException::deviceError) << e.getStringMessage();
-    for (const std::string &mention : mentions) {
-      EXPECT_NE(e.getStringMessage().find(mention), std::string::npos)
-          << "'" << mention << "' missing from: " << e.getStringMessage();
-    }
-  }
+  hslam_test::expectHSlamError([&] { hslam::createV4l2Source(device, options); }, vpHSlamException::deviceError,
+                               mentions);
 }
 } // namespace
 
@@ -248,13 +241,9 @@ TEST_F(V4l2SourceTest, CameraFileIsUsedAndItsSizeMustMatch)
   std::ofstream(other) << "Pinhole 500 500 319.5 239.5 0\n640 480\nnone\n640 480\n";
   m_files.push_back(other);
   m_options.cameraFile = other;
-  try {
-    hslam::createV4l2Source(kFakeDevice, m_options);
-    ADD_FAILURE() << "a 640x480 camera file was accepted for 64x48 images";
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), vpHSlamException::invalidCalibration) << e.getStringMessage();
-    EXPECT_NE(e.getStringMessage().find(other), std::string::npos) << e.getStringMessage();
-  }
+  // A 640x480 camera file must be refused for 64x48 images.
+  hslam_test::expectHSlamError([&] { hslam::createV4l2Source(kFakeDevice, m_options); },
+                               vpHSlamException::invalidCalibration, {other});
 }
 
 TEST_F(V4l2SourceTest, ImposedSizeIsDeviceErrorNamingBothSizes)
@@ -283,13 +272,8 @@ TEST_F(V4l2SourceTest, RepeatedTimestampIsAnError)
   EXPECT_NEAR(frame.timestamp, 5.0, kTimestampTolerance);
   ASSERT_TRUE(source->acquire(I, frame));
   EXPECT_NEAR(frame.timestamp, 5.5, kTimestampTolerance);
-  try {
-    source->acquire(I, frame);
-    ADD_FAILURE() << "a repeated timestamp was accepted";
-  } catch (const vpHSlamException &e) {
-    EXPECT_EQ(e.getCode(), vpHSlamException::invalidTimestamps) << e.getStringMessage();
-    EXPECT_NE(e.getStringMessage().find(kFakeDevice), std::string::npos) << e.getStringMessage();
-  }
+  // A repeated timestamp is refused.
+  hslam_test::expectHSlamError([&] { source->acquire(I, frame); }, vpHSlamException::invalidTimestamps, {kFakeDevice});
 }
 
 TEST_F(V4l2SourceTest, StartFrameIsDroppedAndMaxFramesEndsTheSequence)

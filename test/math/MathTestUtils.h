@@ -1,6 +1,9 @@
-// Shared helpers of the math tests: seeded random samples and central numeric differences.
+// Shared helpers of the math tests: seeded random samples (vectors, twists, poses), tolerances and central numeric
+// differences.
 #ifndef HSLAM_TEST_MATH_TEST_UTILS_H
 #define HSLAM_TEST_MATH_TEST_UTILS_H
+
+#include "math/Sim3.h"
 
 #include <Eigen/Core>
 
@@ -17,6 +20,14 @@ namespace hslam_test
 constexpr double kNumericStep = 1e-6;
 //! Tolerance of an analytic Jacobian against central differences (see kNumericStep: worst case ~5e-9).
 constexpr double kNumericJacobianTol = 1e-7;
+
+//! Round trips and identities in double: a few dozen roundings of O(1..10) numbers.
+constexpr double kRoundTripTol = 1e-12;
+//! Random translations are drawn in [-kTranslationRange, kTranslationRange] metres per axis.
+constexpr double kTranslationRange = 5.0;
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Vector7d = Eigen::Matrix<double, 7, 1>;
 
 //! Fixed seed: every run draws the same samples.
 inline std::mt19937 &rng()
@@ -49,6 +60,40 @@ inline Eigen::Vector3d randomUnitVector()
 inline Eigen::Vector3d randomRotationVector(double angle)
 {
   return angle * randomUnitVector();
+}
+
+//! SE(3) tangent (upsilon, omega): translation part first, as SE3d::exp() takes it.
+inline Vector6d twist(const Eigen::Vector3d &upsilon, const Eigen::Vector3d &omega)
+{
+  Vector6d xi;
+  xi << upsilon, omega;
+  return xi;
+}
+
+//! Random SE(3) tangent whose rotation has the given angle (radians).
+inline Vector6d randomTwist(double angle)
+{
+  return twist(randomVector(kTranslationRange), randomRotationVector(angle));
+}
+
+//! Random rigid transform, rotation angle drawn in [0, maxAngle].
+inline hslam::SE3d randomPose(double maxAngle = M_PI)
+{
+  return hslam::SE3d::exp(randomTwist(uniform(0.0, maxAngle)));
+}
+
+//! Sim(3) tangent (upsilon, omega, sigma = log scale).
+inline Vector7d tangent(const Eigen::Vector3d &upsilon, const Eigen::Vector3d &omega, double sigma)
+{
+  Vector7d xi;
+  xi << upsilon, omega, sigma;
+  return xi;
+}
+
+//! Random Sim(3) tangent with the given rotation angle (radians) and log-scale.
+inline Vector7d randomTangent(double angle, double sigma)
+{
+  return tangent(randomVector(kTranslationRange), randomRotationVector(angle), sigma);
 }
 
 /*!

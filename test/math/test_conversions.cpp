@@ -18,24 +18,17 @@ using Eigen::Matrix4d;
 using Eigen::Vector3d;
 using hslam::SE3d;
 using hslam::Sim3d;
+using hslam_test::kTranslationRange;
 using hslam_test::maxAbsDiff;
-using Vector6d = Eigen::Matrix<double, 6, 1>;
-using Vector7d = Eigen::Matrix<double, 7, 1>;
+using hslam_test::randomPose;
+using hslam_test::Vector6d;
+using hslam_test::Vector7d;
 
 namespace
 {
-constexpr double kTol = 1e-12;
-constexpr double kTranslationRange = 5.0;
+constexpr double kTol = hslam_test::kRoundTripTol;
 // ~45 eps: orthonormality reached by an SVD projection, see DriftedRotationFromTextIsReorthonormalised.
 constexpr double kOrthonormalTol = 1e-14;
-
-SE3d randomPose(double maxAngle = M_PI)
-{
-  Vector6d xi;
-  xi << hslam_test::randomVector(kTranslationRange),
-      hslam_test::randomRotationVector(hslam_test::uniform(0.0, maxAngle));
-  return SE3d::exp(xi);
-}
 
 //! Rounds every entry to `decimals` digits after the point, as a text file written with that precision would.
 vpHomogeneousMatrix roundEntries(const vpHomogeneousMatrix &M, int decimals)
@@ -107,9 +100,7 @@ TEST(Conversions, ExpLogAgreeWithViSPExponentialMap)
 {
   // vpExponentialMap takes the velocity twist (v, w) applied for 1 s: the same ordering as SE3's tangent.
   for (int i = 0; i < 100; ++i) {
-    Vector6d xi;
-    xi << hslam_test::randomVector(kTranslationRange),
-        hslam_test::randomRotationVector(hslam_test::uniform(0.0, M_PI - 1e-2));
+    const Vector6d xi = hslam_test::randomTwist(hslam_test::uniform(0.0, M_PI - 1e-2));
     vpColVector v(6);
     for (unsigned int k = 0; k < 6; ++k) {
       v[k] = xi(k);

@@ -14,34 +14,18 @@ using Eigen::Matrix3d;
 using Eigen::Matrix4d;
 using Eigen::Vector3d;
 using hslam::SE3d;
+using hslam_test::kTranslationRange;
 using hslam_test::maxAbsDiff;
 using hslam_test::numericJacobian;
-using Vector6d = Eigen::Matrix<double, 6, 1>;
+using hslam_test::randomPose;
+using hslam_test::randomTwist;
+using hslam_test::twist;
+using hslam_test::Vector6d;
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 namespace
 {
-// Round trips and identities: a few dozen roundings of O(1..10) numbers.
-constexpr double kTol = 1e-12;
-// Translations drawn in [-kTranslationRange, kTranslationRange] metres.
-constexpr double kTranslationRange = 5.0;
-
-Vector6d twist(const Vector3d &upsilon, const Vector3d &omega)
-{
-  Vector6d xi;
-  xi << upsilon, omega;
-  return xi;
-}
-
-Vector6d randomTwist(double angle)
-{
-  return twist(hslam_test::randomVector(kTranslationRange), hslam_test::randomRotationVector(angle));
-}
-
-SE3d randomPose()
-{
-  return SE3d::exp(randomTwist(hslam_test::uniform(0.0, M_PI)));
-}
+constexpr double kTol = hslam_test::kRoundTripTol;
 
 //! Rotation angles crossing every branch: SO(3) Taylor switch at 1e-3, SE(3) Q switch at 1e-2, near pi.
 std::vector<double> testAngles()

@@ -15,27 +15,17 @@ using Eigen::Matrix4d;
 using Eigen::Vector3d;
 using hslam::SE3d;
 using hslam::Sim3d;
+using hslam_test::kTranslationRange;
 using hslam_test::maxAbsDiff;
 using hslam_test::numericJacobian;
-using Vector7d = Eigen::Matrix<double, 7, 1>;
+using hslam_test::randomTangent;
+using hslam_test::tangent;
+using hslam_test::Vector7d;
 using Matrix7d = Eigen::Matrix<double, 7, 7>;
 
 namespace
 {
-constexpr double kTol = 1e-12;
-constexpr double kTranslationRange = 5.0;
-
-Vector7d tangent(const Vector3d &upsilon, const Vector3d &omega, double sigma)
-{
-  Vector7d xi;
-  xi << upsilon, omega, sigma;
-  return xi;
-}
-
-Vector7d randomTangent(double angle, double sigma)
-{
-  return tangent(hslam_test::randomVector(kTranslationRange), hslam_test::randomRotationVector(angle), sigma);
-}
+constexpr double kTol = hslam_test::kRoundTripTol;
 
 Sim3d randomSim3()
 {

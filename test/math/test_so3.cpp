@@ -10,14 +10,12 @@
 
 using Eigen::Matrix3d;
 using Eigen::Vector3d;
+using hslam_test::kRoundTripTol;
 using hslam_test::maxAbsDiff;
 using hslam_test::numericJacobian;
 
 namespace
 {
-// Round trips in double: a handful of roundings of O(1) quantities.
-constexpr double kRoundTripTol = 1e-12;
-
 //! Angles that cross every branch: 0, tiny, both sides of the Taylor switch (theta = 1e-3), generic, near pi.
 std::vector<double> testAngles()
 {

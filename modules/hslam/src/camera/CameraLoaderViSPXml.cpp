@@ -22,14 +22,12 @@
 #include <visp3/core/vpXmlParserCamera.h>
 
 #include "camera/CameraLoaderSupport.h"
-#include "camera/TextParsing.h"
+#include "common/TextParsing.h"
 
 #include <algorithm>
 #include <cctype>
-#include <fstream>
 #include <iostream>
 #include <mutex>
-#include <sstream>
 #include <streambuf>
 
 namespace
@@ -140,13 +138,7 @@ unsigned int xmlUnsigned(const std::string &xml, const XmlElement &e, const std:
 
 std::vector<XmlCamera> scanViSPXml(const std::string &path)
 {
-  std::ifstream in(path.c_str());
-  if (!in) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, path + ": cannot be opened for reading");
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::string xml = buffer.str();
+  std::string xml = hslam::readTextFile(path, "ViSP camera XML");
   blankComments(xml);
 
   std::vector<XmlCamera> cameras;

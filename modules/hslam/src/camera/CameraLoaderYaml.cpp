@@ -9,14 +9,12 @@
 #include <visp3/hslam/vpHSlamException.h>
 
 #include "camera/CameraLoaderSupport.h"
-#include "camera/TextParsing.h"
+#include "common/TextParsing.h"
 
 #include <opencv2/core.hpp>
 
 #include <cmath>
-#include <fstream>
 #include <limits>
-#include <sstream>
 
 namespace
 {
@@ -120,13 +118,7 @@ vpHSlamCamera readYamlCamera(const cv::FileNode &cam, const std::string &path)
 // the standard "%YAML 1.x" spelling.
 std::string withOpenCVDirective(const std::string &path)
 {
-  std::ifstream in(path.c_str());
-  if (!in) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, path + ": cannot be opened for reading");
-  }
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::string text = buffer.str();
+  std::string text = hslam::readTextFile(path, "camera YAML");
   const std::string directive = "%YAML:1.0";
   if (hslam::startsWith(text, "%YAML:")) {
     return text;

@@ -21,7 +21,7 @@
 #include <visp3/hslam/vpHSlamException.h>
 
 #include "camera/CameraLoaderSupport.h"
-#include "camera/TextParsing.h"
+#include "common/TextParsing.h"
 
 #include <cmath>
 #include <string>

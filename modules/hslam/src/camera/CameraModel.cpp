@@ -74,21 +74,25 @@ CameraModel::CameraModel(double fx, double fy, double cx, double cy) : m_fx(fx),
 
 CameraModel::~CameraModel() = default;
 
-// ---------------------------------------------------------------------------------------------------------------
-PinholeModel::PinholeModel(double fx, double fy, double cx, double cy) : CameraModel(fx, fy, cx, cy) {}
-
-bool PinholeModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Eigen::Matrix<double, 2, 3> *J_p) const
+bool CameraModel::projectPerspective(const Eigen::Vector3d &p, Eigen::Vector2d &uv,
+                                     Eigen::Matrix<double, 2, 3> *J_p) const
 {
   if (p.z() <= kMinDepth) {
     return false;
   }
   uv << m_fx * p.x() / p.z() + m_cx, m_fy * p.y() / p.z() + m_cy;
   if (J_p) {
-    const Eigen::Matrix<double, 2, 3> Jm = perspectiveJacobian(p);
-    J_p->row(0) = m_fx * Jm.row(0);
-    J_p->row(1) = m_fy * Jm.row(1);
+    *J_p = scaleToPixels(perspectiveJacobian(p));
   }
   return true;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+PinholeModel::PinholeModel(double fx, double fy, double cx, double cy) : CameraModel(fx, fy, cx, cy) {}
+
+bool PinholeModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Eigen::Matrix<double, 2, 3> *J_p) const
+{
+  return projectPerspective(p, uv, J_p);
 }
 
 bool PinholeModel::unproject(const Eigen::Vector2d &uv, Eigen::Vector3d &ray) const
@@ -143,10 +147,7 @@ bool RadTanModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Eigen::
   const Eigen::Vector2d md = distort(m, J_p ? &Jd : nullptr);
   uv << m_fx * md.x() + m_cx, m_fy * md.y() + m_cy;
   if (J_p) {
-    Eigen::Matrix<double, 2, 3> J = Jd * perspectiveJacobian(p);
-    J.row(0) *= m_fx;
-    J.row(1) *= m_fy;
-    *J_p = J;
+    *J_p = scaleToPixels(Jd * perspectiveJacobian(p));
   }
   return true;
 }
@@ -217,16 +218,7 @@ bool EquidistantModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Ei
   if (r <= kEquidistantAxisSin * std::sqrt(rho2)) {
     // On the optical axis the model is the pinhole model (theta_d / r -> 1 / z); behind the camera the direction
     // of the distorted point is undefined.
-    if (p.z() <= kMinDepth) {
-      return false;
-    }
-    uv << m_fx * p.x() / p.z() + m_cx, m_fy * p.y() / p.z() + m_cy;
-    if (J_p) {
-      const Eigen::Matrix<double, 2, 3> Jm = perspectiveJacobian(p);
-      J_p->row(0) = m_fx * Jm.row(0);
-      J_p->row(1) = m_fy * Jm.row(1);
-    }
-    return true;
+    return projectPerspective(p, uv, J_p);
   }
   const double theta = std::atan2(r, p.z());
   if (theta > m_maxTheta) {
@@ -243,8 +235,7 @@ bool EquidistantModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Ei
     Eigen::Matrix<double, 2, 3> Jm = Eigen::Vector2d(p.x(), p.y()) * ds.transpose();
     Jm(0, 0) += s;
     Jm(1, 1) += s;
-    J_p->row(0) = m_fx * Jm.row(0);
-    J_p->row(1) = m_fy * Jm.row(1);
+    *J_p = scaleToPixels(Jm);
   }
   return true;
 }
@@ -313,10 +304,7 @@ bool FovModel::project(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Eigen::Mat
     Eigen::Matrix2d Jd = G * m * m.transpose();
     Jd(0, 0) += F;
     Jd(1, 1) += F;
-    Eigen::Matrix<double, 2, 3> J = Jd * perspectiveJacobian(p);
-    J.row(0) *= m_fx;
-    J.row(1) *= m_fy;
-    *J_p = J;
+    *J_p = scaleToPixels(Jd * perspectiveJacobian(p));
   }
   return true;
 }

@@ -67,6 +67,18 @@ protected:
     return Eigen::Vector2d((uv.x() - m_cx) / m_fx, (uv.y() - m_cy) / m_fy);
   }
 
+  //! Pixel Jacobian from the Jacobian \e Jm of the normalised image point: rows scaled by fx and fy.
+  Eigen::Matrix<double, 2, 3> scaleToPixels(const Eigen::Matrix<double, 2, 3> &Jm) const
+  {
+    Eigen::Matrix<double, 2, 3> J;
+    J.row(0) = m_fx * Jm.row(0);
+    J.row(1) = m_fy * Jm.row(1);
+    return J;
+  }
+
+  //! The undistorted perspective projection (pinhole model, and every model on its optical axis).
+  bool projectPerspective(const Eigen::Vector3d &p, Eigen::Vector2d &uv, Eigen::Matrix<double, 2, 3> *J_p) const;
+
   double m_fx, m_fy, m_cx, m_cy;
 };
 

@@ -3,6 +3,7 @@
  */
 #include "io/EurocSource.h"
 
+#include "common/TextParsing.h"
 #include "io/SourceFiles.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -35,14 +36,14 @@ bool isCameraFolder(const std::string &folder)
 std::map<std::uint64_t, double> readTumViExposures(const std::string &timesFile)
 {
   std::map<std::uint64_t, double> exposures;
-  for (const TextLine &line : readTextLines(timesFile)) {
-    const std::vector<std::string> fields = splitFields(line.text, " \t,");
+  for (const TextLine &line : readDataLines(timesFile, "TUM-VI exposure list")) {
+    const std::vector<std::string> fields = splitTokens(line.text, " \t,");
     if (fields.size() < 3) {
       throw vpHSlamException(vpHSlamException::parseError,
                              fileLine(timesFile, line.number) +
                                  ": expected 'timestamp[ns] timestamp[s] exposure[ms]', got '" + line.text + "'");
     }
-    const std::uint64_t ns = parseUnsigned(fields[0], timesFile, line.number, "timestamp [ns]");
+    const std::uint64_t ns = parseUInt64(fields[0], timesFile, line.number, "timestamp [ns]");
     exposures[ns] = parseDouble(fields[2], timesFile, line.number, "exposure [ms]");
   }
   return exposures;
@@ -92,14 +93,14 @@ EurocSource::EurocSource(const std::string &path, const vpHSlamImageSource::Opti
   const std::string csv = joinPath(camFolder, "data.csv");
   const std::string dataFolder = joinPath(camFolder, "data");
   std::vector<IndexedFrame> frames;
-  for (const TextLine &line : readTextLines(csv)) {
-    const std::vector<std::string> fields = splitFields(line.text, ",");
+  for (const TextLine &line : readDataLines(csv, "EuRoC image list")) {
+    const std::vector<std::string> fields = splitTokens(line.text, ",");
     if (fields.size() < 2) {
       throw vpHSlamException(vpHSlamException::parseError, fileLine(csv, line.number) +
                                                                ": expected 'timestamp [ns],filename', got '" +
                                                                line.text + "'");
     }
-    const std::uint64_t ns = parseUnsigned(fields[0], csv, line.number, "timestamp [ns]");
+    const std::uint64_t ns = parseUInt64(fields[0], csv, line.number, "timestamp [ns]");
     IndexedFrame f;
     f.path = joinPath(dataFolder, fields[1]);
     f.timestamp = nanosecondsToSeconds(ns);

@@ -3,6 +3,7 @@
  */
 #include "io/IndexedImageSource.h"
 
+#include "common/TextParsing.h"
 #include "io/SourceFiles.h"
 
 #include <visp3/hslam/vpHSlamException.h>

@@ -7,6 +7,7 @@
 
 #include <visp3/hslam/vpHSlamImageSource.h>
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,7 @@ struct IndexedFrame {
   double timestamp = 0.; //!< seconds
   double exposure = -1.; //!< milliseconds, <= 0 when unknown
   std::string listFile;  //!< file that listed the frame (rgb.txt, data.csv, times.txt), empty when none
-  unsigned int line = 0; //!< 1-based line in listFile, 0 when none
+  std::size_t line = 0;  //!< 1-based line in listFile, 0 when none
 };
 
 /*!

@@ -3,6 +3,7 @@
  */
 #include "io/KittiSource.h"
 
+#include "common/TextParsing.h"
 #include "io/SourceFiles.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -32,13 +33,13 @@ KittiSource::KittiSource(const std::string &path, const vpHSlamImageSource::Opti
   }
   const std::string imageFolder = joinPath(path, "image_0");
   const std::string timesFile = joinPath(path, "times.txt");
-  const std::vector<TextLine> lines = readTextLines(timesFile);
+  const std::vector<TextLine> lines = readDataLines(timesFile, "KITTI times list");
   const std::vector<std::string> images = listImageFiles(imageFolder);
 
   std::vector<IndexedFrame> frames(lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) {
     const TextLine &line = lines[i];
-    const std::vector<std::string> fields = splitFields(line.text, " \t");
+    const std::vector<std::string> fields = splitTokens(line.text, " \t");
     if (fields.size() != 1) {
       throw vpHSlamException(vpHSlamException::parseError, fileLine(timesFile, line.number) +
                                                                ": expected one time in seconds, got '" + line.text +

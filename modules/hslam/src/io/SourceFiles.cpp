@@ -8,12 +8,7 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
-#include <cmath>
-#include <cstdlib>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 namespace hslam
 {
@@ -28,17 +23,6 @@ std::string stripTrailingSeparators(const std::string &path)
     p.pop_back();
   }
   return p;
-}
-
-std::string trim(const std::string &s)
-{
-  const char *blanks = " \t\r\n\f\v";
-  const std::size_t first = s.find_first_not_of(blanks);
-  if (first == std::string::npos) {
-    return std::string();
-  }
-  const std::size_t last = s.find_last_not_of(blanks);
-  return s.substr(first, last - first + 1);
 }
 } // namespace
 
@@ -135,85 +119,6 @@ std::vector<std::string> listImageFiles(const std::string &folder)
   }
   std::sort(names.begin(), names.end());
   return names;
-}
-
-std::vector<TextLine> readTextLines(const std::string &path, char comment)
-{
-  if (!pathIsFile(path)) {
-    throw vpHSlamException(vpHSlamException::fileNotFound, "file '" + path + "' does not exist");
-  }
-  std::ifstream in(path);
-  if (!in) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot open '" + path + "'");
-  }
-  std::vector<TextLine> lines;
-  std::string raw;
-  unsigned int number = 0;
-  while (std::getline(in, raw)) {
-    ++number;
-    const std::string text = trim(raw);
-    if (text.empty() || text.front() == comment) {
-      continue;
-    }
-    lines.push_back(TextLine{number, text});
-  }
-  if (in.bad()) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           "read error in '" + path + "' after line " + std::to_string(number));
-  }
-  return lines;
-}
-
-std::vector<std::string> splitFields(const std::string &text, const std::string &separators)
-{
-  std::vector<std::string> fields;
-  std::size_t pos = 0;
-  while (pos <= text.size()) {
-    const std::size_t next = text.find_first_of(separators, pos);
-    const std::string field = trim(text.substr(pos, next == std::string::npos ? std::string::npos : next - pos));
-    if (!field.empty()) {
-      fields.push_back(field);
-    }
-    if (next == std::string::npos) {
-      break;
-    }
-    pos = next + 1;
-  }
-  return fields;
-}
-
-std::string fileLine(const std::string &path, unsigned int line)
-{
-  return path + ":" + std::to_string(line);
-}
-
-double parseDouble(const std::string &field, const std::string &path, unsigned int line, const std::string &what)
-{
-  const char *begin = field.c_str();
-  char *end = nullptr;
-  errno = 0;
-  const double value = std::strtod(begin, &end);
-  if (field.empty() || end != begin + field.size() || errno == ERANGE || !std::isfinite(value)) {
-    throw vpHSlamException(vpHSlamException::parseError,
-                           fileLine(path, line) + ": cannot parse " + what + " from '" + field + "'");
-  }
-  return value;
-}
-
-std::uint64_t parseUnsigned(const std::string &field, const std::string &path, unsigned int line,
-                            const std::string &what)
-{
-  const char *begin = field.c_str();
-  char *end = nullptr;
-  errno = 0;
-  const unsigned long long value = std::strtoull(begin, &end, 10);
-  const bool digitsOnly =
-      !field.empty() && std::all_of(field.begin(), field.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
-  if (!digitsOnly || end != begin + field.size() || errno == ERANGE) {
-    throw vpHSlamException(vpHSlamException::parseError,
-                           fileLine(path, line) + ": cannot parse " + what + " from '" + field + "'");
-  }
-  return static_cast<std::uint64_t>(value);
 }
 
 void readGreyImage(const std::string &path, vpImage<unsigned char> &I)

@@ -1,20 +1,20 @@
 /*
  * H-SLAM for ViSP.
  */
-//! \file SourceFiles.h  Shared helpers of the dataset readers: paths, listing, text lines, strict number parsing.
+//! \file SourceFiles.h  Shared helpers of the dataset readers: paths, folder listing, image reading. Text lists are
+//! read with common/TextParsing.h.
 #ifndef HSLAM_IO_SOURCE_FILES_H
 #define HSLAM_IO_SOURCE_FILES_H
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
 
-#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace hslam
 {
-//! Helpers of the image-source readers (kept apart from camera/TextParsing.h's names).
+//! Helpers of the image-source readers.
 namespace io
 {
 //! a + "/" + b, without doubling the separator; b returned as is when absolute.
@@ -42,35 +42,6 @@ VISP_EXPORT bool hasVideoExtension(const std::string &name);
   \exception vpHSlamException::fileNotFound when \e folder is not a directory.
 */
 VISP_EXPORT std::vector<std::string> listImageFiles(const std::string &folder);
-
-//! One meaningful line of a text file, with its 1-based number for error messages.
-struct TextLine {
-  unsigned int number = 0;
-  std::string text; //!< trimmed, never empty, never a comment
-};
-
-/*!
-  Read a text list (rgb.txt, times.txt, data.csv, ...): blank lines and lines whose first non-blank character is
-  \e comment are skipped; '\\r' of Windows line ends is removed.
-  \exception vpHSlamException::fileNotFound or fileUnreadable naming \e path.
-*/
-VISP_EXPORT std::vector<TextLine> readTextLines(const std::string &path, char comment = '#');
-
-//! Split on any character of \e separators, dropping empty fields (so "a  b" gives two fields).
-VISP_EXPORT std::vector<std::string> splitFields(const std::string &text, const std::string &separators);
-
-//! "file:line" for messages.
-std::string fileLine(const std::string &path, unsigned int line);
-
-/*!
-  Strict parsing: the whole field must be a finite number.
-  \exception vpHSlamException::parseError naming \e path, \e line and \e what.
-*/
-VISP_EXPORT double parseDouble(const std::string &field, const std::string &path, unsigned int line,
-                               const std::string &what);
-//! Strict parsing of a non-negative integer (e.g. EuRoC nanoseconds). \exception as parseDouble().
-VISP_EXPORT std::uint64_t parseUnsigned(const std::string &field, const std::string &path, unsigned int line,
-                                        const std::string &what);
 
 /*!
   Read one image as 8-bit grey (ViSP's readers convert colour files).

@@ -71,6 +71,22 @@ VISP_EXPORT Eigen::Matrix4d readEurocSensorExtrinsics(const std::string &sensorY
 //! wMs = wMb * bMs for every pose (body trajectory to sensor trajectory, EuRoC T_BS = bMs).
 VISP_EXPORT void applyBodyToSensor(std::vector<StampedPose> &poses, const Eigen::Matrix4d &bMs);
 
+// Checks shared by the readers (TrajectoryIo.cpp, TrajectoryEuroc.cpp); errors name path:line.
+
+/*!
+  Rotation of a quaternion read from a file, given as (w, x, y, z) whatever the file's column order.
+  \param columns : the file's quaternion columns, for the message ("qx qy qz qw").
+  \throw vpHSlamException::parseError when |norm - 1| > kQuaternionNormTolerance; otherwise it is normalised.
+*/
+Eigen::Matrix3d rotationFromFileQuaternion(double w, double x, double y, double z, const std::string &columns,
+                                           const std::string &path, size_t line);
+
+//! Empty when \e R is a rotation (max|R^T R - I| <= kRotationOrthonormalityTolerance, det > 0), else what is wrong.
+std::string rotationDefect(const Eigen::Matrix3d &R);
+
+//! Throws vpHSlamException::invalidTimestamps naming path:line unless \e timestamp follows the last pose's.
+void checkIncreasing(const std::vector<StampedPose> &poses, double timestamp, const std::string &path, size_t line);
+
 } // namespace hslam
 
 #endif

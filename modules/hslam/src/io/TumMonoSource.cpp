@@ -3,6 +3,7 @@
  */
 #include "io/TumMonoSource.h"
 
+#include "common/TextParsing.h"
 #include "io/SourceFiles.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -60,7 +61,7 @@ TumMonoSource::TumMonoSource(const std::string &path, const vpHSlamImageSource::
 
   const std::vector<std::string> images = listImageFiles(imageFolder);
   const std::string timesFile = joinPath(path, "times.txt");
-  const std::vector<TextLine> lines = readTextLines(timesFile);
+  const std::vector<TextLine> lines = readDataLines(timesFile, "TUM monoVO times list");
   if (lines.size() != images.size()) {
     throw vpHSlamException(vpHSlamException::invalidTimestamps,
                            "'" + timesFile + "' has " + std::to_string(lines.size()) + " lines but '" + imageFolder +
@@ -70,7 +71,7 @@ TumMonoSource::TumMonoSource(const std::string &path, const vpHSlamImageSource::
   std::vector<IndexedFrame> frames(images.size());
   for (std::size_t i = 0; i < images.size(); ++i) {
     const TextLine &line = lines[i];
-    const std::vector<std::string> fields = splitFields(line.text, " \t");
+    const std::vector<std::string> fields = splitTokens(line.text, " \t");
     if (fields.size() < 2) {
       throw vpHSlamException(vpHSlamException::parseError, fileLine(timesFile, line.number) +
                                                                ": expected 'id time [exposure]', got '" + line.text +
@@ -79,7 +80,7 @@ TumMonoSource::TumMonoSource(const std::string &path, const vpHSlamImageSource::
     const std::string stem = stemName(images[i]);
     // Pairing is by order; a numbered image whose number differs from the line's id means a list out of step.
     if (isDigits(fields[0]) && isDigits(stem) &&
-        parseUnsigned(fields[0], timesFile, line.number, "id") != parseUnsigned(stem, images[i], 0, "image number")) {
+        parseUInt64(fields[0], timesFile, line.number, "id") != parseUInt64(stem, images[i], 0, "image number")) {
       throw vpHSlamException(vpHSlamException::invalidTimestamps, fileLine(timesFile, line.number) + ": id " +
                                                                       fields[0] + " does not match image '" +
                                                                       images[i] + "' at the same position");

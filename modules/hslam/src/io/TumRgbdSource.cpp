@@ -3,6 +3,7 @@
  */
 #include "io/TumRgbdSource.h"
 
+#include "common/TextParsing.h"
 #include "io/SourceFiles.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -39,8 +40,8 @@ TumRgbdSource::TumRgbdSource(const std::string &path, const vpHSlamImageSource::
   }
   const std::string list = joinPath(path, "rgb.txt");
   std::vector<IndexedFrame> frames;
-  for (const TextLine &line : readTextLines(list)) {
-    const std::vector<std::string> fields = splitFields(line.text, " \t");
+  for (const TextLine &line : readDataLines(list, "TUM RGB-D image list")) {
+    const std::vector<std::string> fields = splitTokens(line.text, " \t");
     if (fields.size() < 2) {
       throw vpHSlamException(vpHSlamException::parseError,
                              fileLine(list, line.number) + ": expected 'timestamp filename', got '" + line.text + "'");

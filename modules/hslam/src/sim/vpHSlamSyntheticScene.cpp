@@ -250,15 +250,22 @@ void vpHSlamSyntheticScene::render(unsigned int i, vpImage<unsigned char> &I) co
   }
 }
 
-vpColVector vpHSlamSyntheticScene::worldPointAt(double u, double v, unsigned int i) const
+void vpHSlamSyntheticScene::surfaceAt(double u, double v, unsigned int i, const char *what, double Pw[3],
+                                      double &depth) const
 {
-  requireFrame(i, "worldPointAt");
+  requireFrame(i, what);
   const vpCameraParameters cam = getCameraParameters();
   const hslam::SimIntrinsics K = {cam.get_px(), cam.get_py(), cam.get_u0(), cam.get_v0(), m_width, m_height};
-  double Pw[3], depth = 0.0;
   if (!m_renderer->worldPoint(m_trajectory->pose(i), K, u, v, Pw, depth)) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamSyntheticScene::worldPointAt: no surface");
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           std::string("vpHSlamSyntheticScene::") + what + ": no surface");
   }
+}
+
+vpColVector vpHSlamSyntheticScene::worldPointAt(double u, double v, unsigned int i) const
+{
+  double Pw[3], depth = 0.0;
+  surfaceAt(u, v, i, "worldPointAt", Pw, depth);
   vpColVector wP(3);
   for (unsigned int a = 0; a < 3; ++a) {
     wP[a] = Pw[a];
@@ -268,13 +275,8 @@ vpColVector vpHSlamSyntheticScene::worldPointAt(double u, double v, unsigned int
 
 double vpHSlamSyntheticScene::depthAt(double u, double v, unsigned int i) const
 {
-  requireFrame(i, "depthAt");
-  const vpCameraParameters cam = getCameraParameters();
-  const hslam::SimIntrinsics K = {cam.get_px(), cam.get_py(), cam.get_u0(), cam.get_v0(), m_width, m_height};
   double Pw[3], depth = 0.0;
-  if (!m_renderer->worldPoint(m_trajectory->pose(i), K, u, v, Pw, depth)) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamSyntheticScene::depthAt: no surface");
-  }
+  surfaceAt(u, v, i, "depthAt", Pw, depth);
   return depth;
 }
 

@@ -96,8 +96,8 @@ public:
   //! Read a DSO `camera.txt` (all four models, relative or absolute intrinsics, rectification lines).
   static vpHSlamCamera loadDso(const std::string &path);
   //! Read a ViSP camera XML file (vpXmlParserCamera). Size must be stored in the file or given.
-  static vpHSlamCamera loadViSPXml(const std::string &path, const std::string &cameraName = "",
-                                   unsigned int width = 0, unsigned int height = 0);
+  static vpHSlamCamera loadViSPXml(const std::string &path, const std::string &cameraName = "", unsigned int width = 0,
+                                   unsigned int height = 0);
   //! Read an EuRoC / TUM-VI `sensor.yaml` (pinhole + radial-tangential or equidistant).
   static vpHSlamCamera loadEurocYaml(const std::string &path);
   //! Read a KITTI odometry `calib.txt` (the \e projection line, default "P0"); image size must be given.

@@ -146,6 +146,8 @@ private:
   void requireConfigured(const char *what) const;
   void requireFrame(unsigned int i, const char *what) const;
   void renderIrradiance(unsigned int i, std::vector<float> &E) const;
+  //! Surface point Pw (world, metres) and its depth seen at pixel (u, v) of frame i; throws naming \e what if none.
+  void surfaceAt(double u, double v, unsigned int i, const char *what, double Pw[3], double &depth) const;
 
   std::string m_imagesDataPath, m_loadedPath;
   unsigned int m_width, m_height, m_frames, m_seed;
