@@ -1,0 +1,108 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "mapping/MatchRefinement.h"
+
+#include <array>
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+//! Patch half size: an 11x11 window, the usual KLT size for 640-px images.
+constexpr int kHalfPatch = 5;
+constexpr int kPatchSide = 2 * kHalfPatch + 1;
+constexpr int kPatchPixels = kPatchSide * kPatchSide;
+constexpr int kMaxIterations = 10;
+//! Stop when the update is below this, pixels.
+constexpr double kConvergedStepPx = 0.01;
+//! Minimum determinant of the 2x2 structure tensor per pixel^2 (grey levels^4): rejects flat and edge-only patches.
+constexpr double kMinStructureDetPerPixelSq = 4.;
+//! Largest RMS grey-level difference after alignment (JPEG and small affine warps leave a few levels).
+constexpr double kMaxResidualRms = 20.;
+
+double bilinear(const vpImage<unsigned char> &I, double u, double v)
+{
+  const int iu = static_cast<int>(u), iv = static_cast<int>(v);
+  const double du = u - iu, dv = v - iv;
+  const unsigned char *r0 = I[static_cast<unsigned int>(iv)] + iu;
+  const unsigned char *r1 = I[static_cast<unsigned int>(iv + 1)] + iu;
+  return (1. - dv) * ((1. - du) * r0[0] + du * r0[1]) + dv * ((1. - du) * r1[0] + du * r1[1]);
+}
+
+bool patchInside(const vpImage<unsigned char> &I, double u, double v)
+{
+  // One extra pixel for the central-difference gradients and the bilinear neighbour.
+  const double margin = kHalfPatch + 2;
+  return u >= margin && v >= margin && u < I.getWidth() - margin && v < I.getHeight() - margin;
+}
+} // namespace
+
+bool refineMatchLucasKanade(const vpImage<unsigned char> &I1, double u1, double v1, const vpImage<unsigned char> &I2,
+                            double &u2, double &v2, double maxShiftPx)
+{
+  if (!patchInside(I1, u1, v1) || !patchInside(I2, u2, v2)) {
+    return false;
+  }
+  // Template and its gradients (inverse compositional: the Hessian is computed once).
+  std::array<double, kPatchPixels> T, gx, gy;
+  double meanT = 0., h00 = 0., h01 = 0., h11 = 0.;
+  int k = 0;
+  for (int dy = -kHalfPatch; dy <= kHalfPatch; ++dy) {
+    for (int dx = -kHalfPatch; dx <= kHalfPatch; ++dx, ++k) {
+      const double u = u1 + dx, v = v1 + dy;
+      T[k] = bilinear(I1, u, v);
+      gx[k] = 0.5 * (bilinear(I1, u + 1., v) - bilinear(I1, u - 1., v));
+      gy[k] = 0.5 * (bilinear(I1, u, v + 1.) - bilinear(I1, u, v - 1.));
+      meanT += T[k];
+      h00 += gx[k] * gx[k];
+      h01 += gx[k] * gy[k];
+      h11 += gy[k] * gy[k];
+    }
+  }
+  meanT /= kPatchPixels;
+  const double det = h00 * h11 - h01 * h01;
+  if (det < kMinStructureDetPerPixelSq * kPatchPixels * kPatchPixels) {
+    return false;
+  }
+  const double u2Start = u2, v2Start = v2;
+  double u = u2, v = v2, residualSq = 0.;
+  bool converged = false;
+  for (int it = 0; it < kMaxIterations && !converged; ++it) {
+    if (!patchInside(I2, u, v)) {
+      return false;
+    }
+    std::array<double, kPatchPixels> I;
+    double meanI = 0.;
+    k = 0;
+    for (int dy = -kHalfPatch; dy <= kHalfPatch; ++dy) {
+      for (int dx = -kHalfPatch; dx <= kHalfPatch; ++dx, ++k) {
+        I[k] = bilinear(I2, u + dx, v + dy);
+        meanI += I[k];
+      }
+    }
+    meanI /= kPatchPixels;
+    double b0 = 0., b1 = 0.;
+    residualSq = 0.;
+    for (k = 0; k < kPatchPixels; ++k) {
+      const double e = (I[k] - meanI) - (T[k] - meanT);
+      b0 += gx[k] * e;
+      b1 += gy[k] * e;
+      residualSq += e * e;
+    }
+    const double du = (h11 * b0 - h01 * b1) / det;
+    const double dv = (h00 * b1 - h01 * b0) / det;
+    u -= du;
+    v -= dv;
+    converged = du * du + dv * dv < kConvergedStepPx * kConvergedStepPx;
+  }
+  if (!converged || std::hypot(u - u2Start, v - v2Start) > maxShiftPx ||
+      residualSq > kMaxResidualRms * kMaxResidualRms * kPatchPixels) {
+    return false;
+  }
+  u2 = u;
+  v2 = v;
+  return true;
+}
+} // namespace hslam

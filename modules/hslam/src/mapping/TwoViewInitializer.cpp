@@ -1,0 +1,411 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "mapping/TwoViewInitializer.h"
+
+#include "mapping/MatchRefinement.h"
+#include "mapping/TwoViewGeometry.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+namespace hslam
+{
+namespace
+{
+//! ORB-SLAM2 (Mur-Artal et al. 2015, sec. IV): homography when R_H = S_H / (S_H + S_F) exceeds this.
+constexpr double kHomographyScoreRatio = 0.45;
+//! Hamming distance above which two ORB descriptors do not match (ORB-SLAM2 ORBmatcher TH_LOW).
+constexpr int kMaxHammingDistance = 50;
+//! An ORB descriptor is 256 bits: four 64-bit words.
+constexpr int kOrbDescriptorWords = 4;
+//! Lowe's ratio test: best distance must be below this fraction of the second best.
+constexpr double kMatchRatio = 0.8;
+/*!
+  Median displacement of the matches (pixels) below which the frame is not even tried: a camera that has not moved
+  cannot produce parallax, and RANSAC on near-identical points returns arbitrary essential matrices.
+*/
+constexpr double kMinMedianFlowPx = 1.0;
+//! ORB-SLAM2 CheckRT: reprojection error bound, 4 sigma^2 (pixels^2, sigma = the RANSAC threshold).
+constexpr double kReprojErrFactorSq = 4.;
+/*!
+  ORB-SLAM2 ReconstructF/H: the motion is ambiguous when another decomposition explains more than this fraction of
+  the best one's points.
+*/
+constexpr double kMaxSecondBestRatio = 0.75;
+/*!
+  ORB-SLAM2 ReconstructF: the best decomposition must explain this fraction of the model's inliers; fewer means
+  the model is wrong (RANSAC locked onto outliers or a degenerate set).
+*/
+constexpr double kMinGoodFractionOfInliers = 0.9;
+//! A triangulated point is returned only with at least this parallax (ORB-SLAM2: cos < 0.99998, ~0.36 deg).
+constexpr double kMinPointParallaxDeg = 0.36;
+//! Huber width of the Sampson refinement, in units of the RANSAC threshold.
+constexpr double kRefineHuberFactor = 2.;
+/*!
+  Lucas-Kanade may move a match at most this far (pixels): the quantisation of ORB's coarsest octaves (1.2^7 = 3.6
+  for 8 levels) is the error it corrects; a longer move means it locked onto another structure.
+*/
+constexpr double kMaxRefinementShiftPx = 3.;
+//! minMatches must at least allow the 8-point homography / fundamental estimates to be over-determined.
+constexpr int kMinMatchesLowerBound = 8;
+//! OpenCV findHomography RANSAC iteration cap (its default).
+constexpr int kHomographyMaxIters = 2000;
+
+std::string where(int line)
+{
+  return std::string(__FILE__) + ":" + std::to_string(line) + ": ";
+}
+
+Eigen::Matrix3d intrinsicsMatrix(const PinholeIntrinsics &K)
+{
+  Eigen::Matrix3d M;
+  M << K.fx, 0., K.cx, 0., K.fy, K.cy, 0., 0., 1.;
+  return M;
+}
+
+struct Hypothesis {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+};
+} // namespace
+
+TwoViewInitializer::TwoViewInitializer(const vpHSlamParameters::Initializer &params, const PinholeIntrinsics &K,
+                                       const OrbExtractorOptions &orbOptions)
+    : m_params(params), m_K(K), m_orb(orbOptions)
+{
+  if (params.minMatches < kMinMatchesLowerBound || params.minParallaxDeg <= 0. || params.ransacThresholdPx <= 0. ||
+      params.ransacConfidence <= 0. || params.ransacConfidence >= 1. || params.maxFramesToInitialize < 1 ||
+      params.initialIdepth <= 0.) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "invalid initializer parameters");
+  }
+  if (K.fx <= 0. || K.fy <= 0.) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "non-positive focal length");
+  }
+}
+
+void TwoViewInitializer::reset()
+{
+  m_state = noFirstFrame;
+  m_firstId = -1;
+  m_framesSinceFirst = 0;
+  m_firstKeypoints.clear();
+  m_firstDescriptors.release();
+  m_firstImage = vpImage<unsigned char>();
+  m_result = TwoViewInitialization();
+  m_lastAttempt = TwoViewAttempt();
+}
+
+void TwoViewInitializer::setFirstFrame(const vpImage<unsigned char> &I, int frameId)
+{
+  reset();
+  m_orb.extract(I, m_firstKeypoints, m_firstDescriptors);
+  m_firstImage = I;
+  m_width = I.getWidth();
+  m_height = I.getHeight();
+  m_firstId = frameId;
+  m_state = waiting;
+}
+
+const TwoViewInitialization &TwoViewInitializer::result() const
+{
+  if (m_state != initialized) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "result() before initialisation");
+  }
+  return m_result;
+}
+
+TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned char> &I, int frameId)
+{
+  if (m_state == initialized) {
+    return m_state;
+  }
+  if (m_state == noFirstFrame) {
+    setFirstFrame(I, frameId);
+    return m_state;
+  }
+  if (I.getWidth() != m_width || I.getHeight() != m_height) {
+    throw vpHSlamException(vpHSlamException::invalidImage,
+                           where(__LINE__) + "frame " + std::to_string(frameId) + " is " +
+                               std::to_string(I.getWidth()) + "x" + std::to_string(I.getHeight()) +
+                               ", the first frame " + std::to_string(m_width) + "x" + std::to_string(m_height));
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat descriptors;
+  m_orb.extract(I, keypoints, descriptors);
+  std::vector<Match> matches;
+  matchToFirst(keypoints, descriptors, matches);
+  refineMatches(I, matches);
+  ++m_framesSinceFirst;
+
+  TwoViewAttempt attempt;
+  attempt.numMatches = static_cast<int>(matches.size());
+  attempt.numRefinedMatches =
+      static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
+  attempt.outcome = solve(matches, attempt);
+  if (attempt.outcome == TwoViewAttempt::initialized) {
+    m_result.firstFrameId = m_firstId;
+    m_result.currentFrameId = frameId;
+    m_state = initialized;
+  } else if (attempt.outcome == TwoViewAttempt::tooFewMatches || m_framesSinceFirst >= m_params.maxFramesToInitialize) {
+    // Matches only get fewer as the view moves on: start again from this frame (ORB-SLAM2 does the same).
+    m_firstKeypoints.swap(keypoints);
+    m_firstDescriptors = descriptors;
+    m_firstImage = I;
+    m_firstId = frameId;
+    m_framesSinceFirst = 0;
+  }
+  m_lastAttempt = attempt;
+  return m_state;
+}
+
+void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints, const cv::Mat &descriptors,
+                                      std::vector<Match> &matches) const
+{
+  matches.clear();
+  if (keypoints.empty() || m_firstKeypoints.empty()) {
+    return;
+  }
+  // One brute-force pass over all pairs gives each current descriptor its best and second-best first-frame
+  // distances (ratio test) and each first-frame descriptor its best current one (mutual check). Twice as fast as
+  // cv::BFMatcher's knnMatch + match, which computes every distance twice.
+  if (descriptors.cols != kOrbDescriptorWords * static_cast<int>(sizeof(uint64_t)) || descriptors.type() != CV_8U ||
+      !descriptors.isContinuous() || m_firstDescriptors.cols != descriptors.cols) {
+    throw vpHSlamException(vpHSlamException::unsupported, where(__LINE__) + "ORB descriptors must be 32 bytes");
+  }
+  const int nCur = descriptors.rows, nFirst = m_firstDescriptors.rows;
+  std::vector<int> bestCurOfFirst(static_cast<size_t>(nFirst), -1);
+  std::vector<int> bestDistOfFirst(static_cast<size_t>(nFirst), std::numeric_limits<int>::max());
+  std::vector<int> bestFirstOfCur(static_cast<size_t>(nCur), -1);
+  std::vector<int> bestDistOfCur(static_cast<size_t>(nCur)), secondDistOfCur(static_cast<size_t>(nCur));
+  for (int i = 0; i < nCur; ++i) {
+    const uint64_t *di = descriptors.ptr<uint64_t>(i);
+    int best = std::numeric_limits<int>::max(), second = best, bestJ = -1;
+    for (int j = 0; j < nFirst; ++j) {
+      const uint64_t *dj = m_firstDescriptors.ptr<uint64_t>(j);
+      int dist = 0;
+      for (int w = 0; w < kOrbDescriptorWords; ++w) {
+        dist += __builtin_popcountll(di[w] ^ dj[w]);
+      }
+      if (dist < best) {
+        second = best;
+        best = dist;
+        bestJ = j;
+      } else if (dist < second) {
+        second = dist;
+      }
+      if (dist < bestDistOfFirst[static_cast<size_t>(j)]) {
+        bestDistOfFirst[static_cast<size_t>(j)] = dist;
+        bestCurOfFirst[static_cast<size_t>(j)] = i;
+      }
+    }
+    bestFirstOfCur[static_cast<size_t>(i)] = bestJ;
+    bestDistOfCur[static_cast<size_t>(i)] = best;
+    secondDistOfCur[static_cast<size_t>(i)] = second;
+  }
+  for (int i = 0; i < nCur; ++i) {
+    const int j = bestFirstOfCur[static_cast<size_t>(i)];
+    const int best = bestDistOfCur[static_cast<size_t>(i)];
+    if (j < 0 || best > kMaxHammingDistance) {
+      continue;
+    }
+    if (best >= kMatchRatio * secondDistOfCur[static_cast<size_t>(i)]) {
+      continue;
+    }
+    if (bestCurOfFirst[static_cast<size_t>(j)] != i) {
+      continue;
+    }
+    const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(j)].pt;
+    const cv::Point2f &b = keypoints[static_cast<size_t>(i)].pt;
+    matches.push_back({cv::Point2d(a.x, a.y), cv::Point2d(b.x, b.y)});
+  }
+}
+
+void TwoViewInitializer::refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches) const
+{
+  for (Match &m : matches) {
+    m.refined = refineMatchLucasKanade(m_firstImage, m.p1.x, m.p1.y, I, m.p2.x, m.p2.y, kMaxRefinementShiftPx);
+  }
+}
+
+TwoViewAttempt::Outcome TwoViewInitializer::solve(const std::vector<Match> &matches, TwoViewAttempt &attempt)
+{
+  const int n = static_cast<int>(matches.size());
+  if (n < m_params.minMatches) {
+    return TwoViewAttempt::tooFewMatches;
+  }
+  std::vector<cv::Point2d> cv1, cv2;
+  PixelVector p1, p2;
+  std::vector<double> flow;
+  for (const Match &m : matches) {
+    cv1.push_back(m.p1);
+    cv2.push_back(m.p2);
+    p1.emplace_back(m.p1.x, m.p1.y);
+    p2.emplace_back(m.p2.x, m.p2.y);
+    flow.push_back(std::hypot(m.p2.x - m.p1.x, m.p2.y - m.p1.y));
+  }
+  std::nth_element(flow.begin(), flow.begin() + n / 2, flow.end());
+  attempt.medianFlowPx = flow[static_cast<size_t>(n / 2)];
+  if (attempt.medianFlowPx < kMinMedianFlowPx) {
+    return TwoViewAttempt::tooLittleMotion;
+  }
+
+  const Eigen::Matrix3d Keig = intrinsicsMatrix(m_K);
+  const Eigen::Matrix3d Kinv = Keig.inverse();
+  cv::Mat Kcv;
+  cv::eigen2cv(Keig, Kcv);
+  const double sigma = m_params.ransacThresholdPx;
+
+  // Essential matrix: the 5-point solver may return several solutions stacked; keep the best scored one.
+  cv::Mat Es = cv::findEssentialMat(cv1, cv2, Kcv, cv::RANSAC, m_params.ransacConfidence, sigma);
+  double scoreF = 0.;
+  Eigen::Matrix3d bestE = Eigen::Matrix3d::Zero();
+  std::vector<unsigned char> inliersF, tmpInliers;
+  for (int k = 0; k + 3 <= Es.rows; k += 3) {
+    Eigen::Matrix3d E;
+    cv::cv2eigen(Es.rowRange(k, k + 3), E);
+    const double s = fundamentalScore(Kinv.transpose() * E * Kinv, p1, p2, sigma, tmpInliers);
+    if (s > scoreF) {
+      scoreF = s;
+      bestE = E;
+      inliersF = tmpInliers;
+    }
+  }
+  cv::Mat Hcv =
+      cv::findHomography(cv1, cv2, cv::RANSAC, sigma, cv::noArray(), kHomographyMaxIters, m_params.ransacConfidence);
+  double scoreH = 0.;
+  std::vector<unsigned char> inliersH;
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  if (!Hcv.empty()) {
+    cv::cv2eigen(Hcv, H);
+    scoreH = homographyScore(H, p1, p2, sigma, inliersH);
+  }
+  if (scoreF + scoreH <= 0.) {
+    return TwoViewAttempt::modelFailed;
+  }
+  attempt.scoreRatioH = scoreH / (scoreH + scoreF);
+  const bool useHomography = attempt.scoreRatioH > kHomographyScoreRatio;
+
+  std::vector<Hypothesis> hypotheses;
+  if (useHomography) {
+    std::vector<cv::Mat> Rs, ts, normals;
+    cv::decomposeHomographyMat(Hcv, Kcv, Rs, ts, normals);
+    for (size_t k = 0; k < Rs.size(); ++k) {
+      Hypothesis h;
+      cv::cv2eigen(Rs[k], h.R);
+      cv::cv2eigen(ts[k], h.t);
+      // t is known up to the plane distance; a null t (pure rotation) is kept: it fails the parallax test.
+      if (h.t.norm() > 0.) {
+        h.t.normalize();
+      }
+      hypotheses.push_back(h);
+    }
+  } else if (scoreF > 0.) {
+    cv::Mat Ecv, R1, R2, t;
+    cv::eigen2cv(bestE, Ecv);
+    cv::decomposeEssentialMat(Ecv, R1, R2, t);
+    for (const cv::Mat &Rcv : {R1, R2}) {
+      for (const double sign : {1., -1.}) {
+        Hypothesis h;
+        cv::cv2eigen(Rcv, h.R);
+        cv::cv2eigen(t, h.t);
+        h.t *= sign;
+        hypotheses.push_back(h);
+      }
+    }
+  }
+  const std::vector<unsigned char> &inliers = useHomography ? inliersH : inliersF;
+  const int numModelInliers = static_cast<int>(std::count(inliers.begin(), inliers.end(), 1));
+  if (hypotheses.empty() || numModelInliers < m_params.minMatches) {
+    attempt.numInliers = numModelInliers;
+    return hypotheses.empty() ? TwoViewAttempt::modelFailed : TwoViewAttempt::tooFewInliers;
+  }
+
+  const double maxReprojErrSq = kReprojErrFactorSq * sigma * sigma;
+  std::vector<MotionCheck> checks;
+  int best = -1, bestGood = 0, secondGood = 0;
+  for (size_t k = 0; k < hypotheses.size(); ++k) {
+    checks.push_back(checkMotion(hypotheses[k].R, hypotheses[k].t, m_K, p1, p2, inliers, maxReprojErrSq));
+    const int good = checks.back().numGood;
+    if (good > bestGood) {
+      secondGood = bestGood;
+      bestGood = good;
+      best = static_cast<int>(k);
+    } else if (good > secondGood) {
+      secondGood = good;
+    }
+  }
+  attempt.numInliers = bestGood;
+  if (best < 0) {
+    return TwoViewAttempt::modelFailed;
+  }
+  attempt.parallaxDeg = checks[static_cast<size_t>(best)].medianParallaxDeg;
+  if (bestGood < m_params.minMatches || bestGood < kMinGoodFractionOfInliers * numModelInliers) {
+    return TwoViewAttempt::tooFewInliers;
+  }
+  if (attempt.parallaxDeg < m_params.minParallaxDeg) {
+    return TwoViewAttempt::lowParallax;
+  }
+  if (secondGood > kMaxSecondBestRatio * bestGood) {
+    return TwoViewAttempt::ambiguousMotion;
+  }
+
+  // Polish the motion on all its points (the minimal RANSAC sample used 5), then triangulate again.
+  Hypothesis motion = hypotheses[static_cast<size_t>(best)];
+  if (refineRelativePose(motion.R, motion.t, m_K, p1, p2, checks[static_cast<size_t>(best)].good,
+                         kRefineHuberFactor * sigma, &attempt.translationDirSigmaDeg)) {
+    checks[static_cast<size_t>(best)] = checkMotion(motion.R, motion.t, m_K, p1, p2, inliers, maxReprojErrSq);
+  }
+  const MotionCheck &check = checks[static_cast<size_t>(best)];
+  attempt.numInliers = check.numGood;
+  attempt.parallaxDeg = check.medianParallaxDeg;
+  // The refined motion may trade translation for rotation (small-baseline ambiguity): check again.
+  if (check.numGood < m_params.minMatches) {
+    return TwoViewAttempt::tooFewInliers;
+  }
+  if (check.medianParallaxDeg < m_params.minParallaxDeg) {
+    return TwoViewAttempt::lowParallax;
+  }
+
+  TwoViewInitialization result;
+  std::vector<double> idepths;
+  for (size_t i = 0; i < p1.size(); ++i) {
+    if (!check.good[i] || check.parallaxDeg[i] < kMinPointParallaxDeg || check.X1[i].z() <= 0.) {
+      continue;
+    }
+    InitialPoint pt;
+    pt.u = p1[i].x();
+    pt.v = p1[i].y();
+    pt.uCur = p2[i].x();
+    pt.vCur = p2[i].y();
+    pt.idepth = 1. / check.X1[i].z();
+    pt.parallaxDeg = check.parallaxDeg[i];
+    result.points.push_back(pt);
+    idepths.push_back(pt.idepth);
+  }
+  if (static_cast<int>(idepths.size()) < m_params.minMatches) {
+    return TwoViewAttempt::tooFewInliers;
+  }
+  // Scale: with |t| = 1 the depths are in baselines; rescale so the median inverse depth is initialIdepth.
+  std::nth_element(idepths.begin(), idepths.begin() + static_cast<std::ptrdiff_t>(idepths.size() / 2), idepths.end());
+  const double scale = idepths[idepths.size() / 2] / m_params.initialIdepth;
+  for (InitialPoint &pt : result.points) {
+    pt.idepth /= scale;
+  }
+  result.c2Mc1 = SE3d(Eigen::Matrix3d(motion.R), Eigen::Vector3d(motion.t * scale));
+  result.numInliers = check.numGood;
+  result.parallaxDeg = check.medianParallaxDeg;
+  result.fromHomography = useHomography;
+  result.translationDirSigmaDeg = attempt.translationDirSigmaDeg;
+  m_result = result;
+  return TwoViewAttempt::initialized;
+}
+} // namespace hslam
