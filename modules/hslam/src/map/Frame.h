@@ -24,13 +24,13 @@
 namespace hslam
 {
 struct Frame {
-  int id = -1;              //!< 0-based index of the frame in the input sequence
-  int keyframeId = -1;      //!< index among keyframes, -1 when not a keyframe
-  double timestamp = 0.;    //!< seconds
-  double exposure = 1.;     //!< exposure time (any consistent unit; 1 when unknown)
-  SE3d cMw;                 //!< world-to-camera transform
-  AffineBrightness affine;  //!< brightness parameters (a, b)
-  ImagePyramid pyramid;     //!< photometric (irradiance) pyramid used by the direct part
+  int id = -1;                //!< 0-based index of the frame in the input sequence
+  int keyframeId = -1;        //!< index among keyframes, -1 when not a keyframe
+  double timestamp = 0.;      //!< seconds
+  double exposure = 1.;       //!< exposure time (any consistent unit; 1 when unknown)
+  SE3d cMw;                   //!< world-to-camera transform
+  AffineBrightness affine;    //!< brightness parameters (a, b)
+  ImagePyramid pyramid;       //!< photometric (irradiance) pyramid used by the direct part
   vpImage<unsigned char> raw; //!< rectified, photometrically RAW 8-bit image (FAST / ORB run on it)
 };
 

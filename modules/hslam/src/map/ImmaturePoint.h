@@ -32,12 +32,12 @@ enum class TraceStatus : uint8_t {
 
 struct ImmaturePoint {
   int hostKeyframeId = -1;
-  float u = 0.f, v = 0.f;    //!< host pixel, level 0
-  int selectionLevel = 0;    //!< pyramid level at which the selector picked it (0, 1 or 2; DSO "type")
-  bool isCorner = false;     //!< FAST corner (features issue) rather than a gradient pixel
-  float idepthMin = 0.f;     //!< lower bound of the inverse-depth interval, 1/m
+  float u = 0.f, v = 0.f; //!< host pixel, level 0
+  int selectionLevel = 0; //!< pyramid level at which the selector picked it (0, 1 or 2; DSO "type")
+  bool isCorner = false;  //!< FAST corner (features issue) rather than a gradient pixel
+  float idepthMin = 0.f;  //!< lower bound of the inverse-depth interval, 1/m
   float idepthMax = std::numeric_limits<float>::infinity(); //!< upper bound (infinite until first trace)
-  float quality = 1e4f;      //!< second-best / best matching error ratio of the last trace (DSO)
+  float quality = 1e4f;        //!< second-best / best matching error ratio of the last trace (DSO)
   float energyThreshold = 0.f; //!< outlier threshold on the summed pattern error
   TraceStatus lastStatus = TraceStatus::uninitialized;
   std::array<float, kPatternSize> patch{};       //!< host intensities of the pattern

@@ -23,10 +23,10 @@
 namespace hslam
 {
 struct Keyframe {
-  FramePtr frame;                          //!< pose cMw, affine (a, b), pyramid, raw image
-  std::vector<MapPoint> points;            //!< hosted points (active, marginalised or outlier)
-  std::vector<ImmaturePoint> immature;     //!< hosted candidates still being traced
-  bool inWindow = true;                    //!< false once marginalised from the photometric window
+  FramePtr frame;                      //!< pose cMw, affine (a, b), pyramid, raw image
+  std::vector<MapPoint> points;        //!< hosted points (active, marginalised or outlier)
+  std::vector<ImmaturePoint> immature; //!< hosted candidates still being traced
+  bool inWindow = true;                //!< false once marginalised from the photometric window
   int id() const { return frame->keyframeId; }
 };
 

@@ -37,7 +37,7 @@ struct MapPoint {
   double idepth = 0.;      //!< inverse depth in the host camera, 1/metres (up to the monocular scale)
   double idepthVar = 0.;   //!< variance of idepth, from the window Hessian
   PointStatus status = PointStatus::active;
-  bool isCorner = false;   //!< selected as a FAST corner (descriptor is reliable) rather than a gradient pixel
+  bool isCorner = false; //!< selected as a FAST corner (descriptor is reliable) rather than a gradient pixel
   std::array<float, kPatternSize> patch{};       //!< host intensities of the pattern pixels (active only)
   std::array<float, kPatternSize> patchWeight{}; //!< gradient-dependent weights c^2/(c^2+|g|^2) per pixel (DSO)
   std::array<uint32_t, 8> orb{};                 //!< 256-bit ORB descriptor (filled by the features issue)
