@@ -21,7 +21,7 @@ jobs=${JOBS:-$(nproc)}
 
 # Debian packages the build, the tests and the demo need. Installed only when missing.
 packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
-  libbenchmark-dev libv4l-dev visp-images-data)
+  libbenchmark-dev libv4l-dev libzip-dev visp-images-data)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()

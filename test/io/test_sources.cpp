@@ -1,7 +1,9 @@
 // Image sources: each reader on the shared sequences, auto-detection, and error reporting on broken copies made
-// in a temporary folder (never in the repository).
+// in a temporary folder (never in the repository). More broken copies in test_sources_broken.cpp, TUM layouts
+// (images.zip, photometric extension of TUM RGB-D) in test_sources_tum.cpp.
 #include "HSlamTestData.h"
 #include "HSlamTestErrors.h"
+#include "ImageSourceFixtures.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
@@ -22,70 +24,10 @@
 
 namespace fs = std::filesystem;
 using hslam_test::expectHSlamError;
+using namespace hslam_test;
 
 namespace
 {
-//! A fresh folder under the system temp dir, removed with its content at scope exit.
-struct TempDir {
-  std::string path;
-  TempDir()
-  {
-    std::string tmpl = (fs::temp_directory_path() / "hslam_sources_XXXXXX").string();
-    std::vector<char> buf(tmpl.begin(), tmpl.end());
-    buf.push_back('\0');
-    const char *made = ::mkdtemp(buf.data());
-    path = made ? std::string(made) : std::string();
-  }
-  ~TempDir()
-  {
-    std::error_code ec;
-    if (!path.empty()) {
-      fs::remove_all(path, ec);
-    }
-  }
-  std::string operator/(const std::string &rel) const { return path + "/" + rel; }
-};
-
-void writeText(const std::string &path, const std::string &text)
-{
-  fs::create_directories(fs::path(path).parent_path());
-  std::ofstream out(path);
-  out << text;
-}
-
-void copyFile(const std::string &from, const std::string &to)
-{
-  fs::create_directories(fs::path(to).parent_path());
-  fs::copy_file(from, to, fs::copy_options::overwrite_existing);
-}
-
-std::vector<std::string> readLines(const std::string &path)
-{
-  std::vector<std::string> lines;
-  std::ifstream in(path);
-  std::string line;
-  while (std::getline(in, line)) {
-    lines.push_back(line);
-  }
-  return lines;
-}
-
-//! Reads every frame; returns their metadata and checks size and order on the way.
-std::vector<vpHSlamImageSource::Frame> readAll(vpHSlamImageSource &source, unsigned int width, unsigned int height)
-{
-  std::vector<vpHSlamImageSource::Frame> frames;
-  vpImage<unsigned char> I;
-  vpHSlamImageSource::Frame frame;
-  while (source.acquire(I, frame)) {
-    EXPECT_EQ(I.getWidth(), width);
-    EXPECT_EQ(I.getHeight(), height);
-    EXPECT_EQ(frame.index, frames.size());
-    frames.push_back(frame);
-  }
-  EXPECT_FALSE(source.acquire(I, frame)) << "acquire after the end must keep returning false";
-  return frames;
-}
-
 void checkTumRgbdSequence(const std::string &path, std::size_t count)
 {
   EXPECT_EQ(vpHSlamImageSource::detectFormat(path), vpHSlamImageSource::formatTumRgbd);
@@ -331,37 +273,6 @@ TEST(ImageSourceBroken, ImageSizeDiffersFromCalibration)
   expectHSlamError([&] { source->acquire(I, frame); }, vpHSlamException::invalidImage, {"000000.jpg"});
 }
 
-namespace
-{
-//! Synthetic TUM monoVO folder: \e n 64x48 PNGs, times.txt with exposures, camera.txt, pcalib.txt.
-std::string makeTumMono(const TempDir &tmp, unsigned int n)
-{
-  const std::string dir = tmp / "tum_mono";
-  fs::create_directories(dir + "/images");
-  std::ostringstream times;
-  for (unsigned int i = 0; i < n; ++i) {
-    vpImage<unsigned char> I(48, 64);
-    for (unsigned int v = 0; v < I.getHeight(); ++v) {
-      for (unsigned int u = 0; u < I.getWidth(); ++u) {
-        I[v][u] = static_cast<unsigned char>((u * 3 + v * 2 + i * 10) % 256);
-      }
-    }
-    char name[32];
-    std::snprintf(name, sizeof(name), "%05u.png", i);
-    vpImageIo::write(I, dir + "/images/" + name);
-    times << std::string(name, 5) << " " << (100. + 0.05 * i) << " " << (5. + 2.5 * i) << "\n";
-  }
-  writeText(dir + "/times.txt", times.str());
-  writeText(dir + "/camera.txt", "Pinhole 50 50 31.5 23.5 0\n64 48\nnone\n64 48\n");
-  std::ostringstream pcalib;
-  for (int k = 0; k < 256; ++k) {
-    pcalib << 255. * std::pow(k / 255., 1.2) << (k < 255 ? " " : "\n");
-  }
-  writeText(dir + "/pcalib.txt", pcalib.str());
-  return dir;
-}
-} // namespace
-
 TEST(ImageSourceSynthetic, TumMonoExposureAndPhotometricCalibration)
 {
   TempDir tmp;
@@ -394,16 +305,6 @@ TEST(ImageSourceSynthetic, TumMonoTimesAndImagesDiffer)
   const std::string dir = makeTumMono(tmp, 4);
   fs::remove(dir + "/images/00003.png");
   expectHSlamError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::invalidTimestamps, {"times.txt"});
-}
-
-TEST(ImageSourceSynthetic, TumMonoZipOnlyIsUnsupported)
-{
-  TempDir tmp;
-  const std::string dir = makeTumMono(tmp, 2);
-  fs::remove_all(dir + "/images");
-  writeText(dir + "/images.zip", "PK");
-  EXPECT_EQ(vpHSlamImageSource::detectFormat(dir), vpHSlamImageSource::formatTumMono);
-  expectHSlamError([&] { vpHSlamImageSource::create(dir); }, vpHSlamException::unsupported, {"unzip images.zip"});
 }
 
 TEST(ImageSourceSynthetic, ImageFolderAndPattern)

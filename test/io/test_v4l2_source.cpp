@@ -246,6 +246,49 @@ TEST_F(V4l2SourceTest, CameraFileIsUsedAndItsSizeMustMatch)
                                vpHSlamException::invalidCalibration, {other});
 }
 
+TEST_F(V4l2SourceTest, UnchosenSizeIsTheCameraFileSize)
+{
+  REQUIRE_V4L2_DOUBLE();
+  const std::string camera = m_folder + "/camera_small.txt";
+  std::ofstream(camera) << "Pinhole 50 51 30.5 22.5 0\n"
+                        << kWidth << " " << kHeight << "\nnone\n"
+                        << kWidth << " " << kHeight << "\n";
+  m_files.push_back(camera);
+  m_options.width = 0; // not chosen: the camera file's size is requested, which the double serves
+  m_options.height = 0;
+  m_options.cameraFile = camera;
+  std::unique_ptr<vpHSlamImageSource> source = hslam::createV4l2Source(kFakeDevice, m_options);
+  EXPECT_EQ(source->getCamera().getWidth(), kWidth);
+  EXPECT_DOUBLE_EQ(source->getCamera().getFx(), 50.);
+  checkStream(*source, kFrameCount, 0);
+
+  // A VGA camera file makes the source ask for 640x480, which the double (64x48 only) refuses.
+  const std::string vga = m_folder + "/camera_vga.txt";
+  std::ofstream(vga) << "Pinhole 500 500 319.5 239.5 0\n640 480\nnone\n640 480\n";
+  m_files.push_back(vga);
+  m_options.cameraFile = vga;
+  expectDeviceError(kFakeDevice, m_options, {kFakeDevice, "requested size 640x480", "64x48"});
+}
+
+TEST_F(V4l2SourceTest, UnchosenSizeWithoutCameraFileIsVga)
+{
+  REQUIRE_V4L2_DOUBLE();
+  const vpHSlamImageSource::Options defaults;
+  EXPECT_EQ(defaults.width, 0u);
+  EXPECT_EQ(defaults.height, 0u);
+  m_options.width = 0;
+  m_options.height = 0;
+  expectDeviceError(kFakeDevice, m_options, {kFakeDevice, "requested size 640x480", "64x48"});
+}
+
+TEST_F(V4l2SourceTest, OneDimensionOnlyIsInvalidArgument)
+{
+  REQUIRE_V4L2_DOUBLE();
+  m_options.height = 0;
+  hslam_test::expectHSlamError([&] { hslam::createV4l2Source(kFakeDevice, m_options); },
+                               vpHSlamException::invalidArgument, {kFakeDevice, "64x0"});
+}
+
 TEST_F(V4l2SourceTest, ImposedSizeIsDeviceErrorNamingBothSizes)
 {
   REQUIRE_V4L2_DOUBLE();

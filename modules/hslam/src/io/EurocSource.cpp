@@ -36,7 +36,7 @@ bool isCameraFolder(const std::string &folder)
 std::map<std::uint64_t, double> readTumViExposures(const std::string &timesFile)
 {
   std::map<std::uint64_t, double> exposures;
-  for (const TextLine &line : readDataLines(timesFile, "TUM-VI exposure list")) {
+  for (const TextLine &line : readListLines(timesFile, "TUM-VI exposure list")) {
     const std::vector<std::string> fields = splitTokens(line.text, " \t,");
     if (fields.size() < 3) {
       throw vpHSlamException(vpHSlamException::parseError,
@@ -83,17 +83,12 @@ EurocSource::EurocSource(const std::string &path, const vpHSlamImageSource::Opti
   if (pathIsFile(joinPath(dsoFolder, "times.txt"))) {
     exposures = readTumViExposures(joinPath(dsoFolder, "times.txt"));
   }
-  const std::string pcalib = joinPath(dsoFolder, "pcalib.txt");
-  const std::string vignette = joinPath(dsoFolder, "vignette.png");
-  if (pathIsFile(pcalib) || pathIsFile(vignette)) {
-    m_photometric.load(pathIsFile(pcalib) ? pcalib : std::string(), pathIsFile(vignette) ? vignette : std::string(),
-                       m_camera.getWidth(), m_camera.getHeight());
-  }
+  loadFolderPhotometricCalibration(dsoFolder);
 
   const std::string csv = joinPath(camFolder, "data.csv");
   const std::string dataFolder = joinPath(camFolder, "data");
   std::vector<IndexedFrame> frames;
-  for (const TextLine &line : readDataLines(csv, "EuRoC image list")) {
+  for (const TextLine &line : readListLines(csv, "EuRoC image list")) {
     const std::vector<std::string> fields = splitTokens(line.text, ",");
     if (fields.size() < 2) {
       throw vpHSlamException(vpHSlamException::parseError, fileLine(csv, line.number) +

@@ -8,8 +8,10 @@
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdio>
+#include <filesystem>
 
 namespace hslam
 {
@@ -19,6 +21,8 @@ namespace
 {
 //! Longest file name a pattern may produce.
 constexpr std::size_t kMaxPathLength = 4096;
+//! Longest digit run taken for a frame number (fits unsigned int).
+constexpr std::size_t kMaxIndexDigits = 9;
 
 std::string formatPattern(const std::string &pattern, unsigned int index)
 {
@@ -32,6 +36,45 @@ std::string formatPattern(const std::string &pattern, unsigned int index)
     throw vpHSlamException(vpHSlamException::invalidArgument, "image pattern '" + pattern + "' gives a too long name");
   }
   return std::string(buffer.data(), static_cast<std::size_t>(n));
+}
+
+/*!
+  Smallest-numbered file of \e pattern's folder that the pattern produces for a number above \e gap, empty when
+  none. Only a conversion in the file name is searched (not in a folder component).
+*/
+std::string firstFileAfter(const std::string &pattern, unsigned int gap)
+{
+  const std::string folder = parentPath(pattern);
+  const std::string namePattern = baseName(pattern);
+  const std::size_t percent = namePattern.find('%');
+  if (percent == std::string::npos || !pathIsDirectory(folder)) {
+    return std::string();
+  }
+  const std::size_t conversionEnd = namePattern.find_first_of("du", percent);
+  const std::string prefix = namePattern.substr(0, percent), suffix = namePattern.substr(conversionEnd + 1);
+  std::string best;
+  unsigned long bestIndex = 0;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() + suffix.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0) {
+      continue;
+    }
+    const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (digits.size() > kMaxIndexDigits ||
+        !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c) != 0; })) {
+      continue;
+    }
+    const unsigned long index = std::stoul(digits);
+    // The pattern must give back this very name (same zero padding), else it is another sequence.
+    if (index > gap && (best.empty() || index < bestIndex) &&
+        formatPattern(pattern, static_cast<unsigned int>(index)) == joinPath(folder, name)) {
+      best = joinPath(folder, name);
+      bestIndex = index;
+    }
+  }
+  return best;
 }
 } // namespace
 
@@ -68,6 +111,16 @@ std::vector<std::string> expandImagePattern(const std::string &pattern, unsigned
   }
   for (; pathIsFile(formatPattern(pattern, index)); ++index) {
     files.push_back(formatPattern(pattern, index));
+  }
+  if (!files.empty()) {
+    const std::string after = firstFileAfter(pattern, index);
+    if (!after.empty()) {
+      throw vpHSlamException(vpHSlamException::fileNotFound,
+                             "image pattern '" + pattern + "': '" + formatPattern(pattern, index) +
+                                 "' does not exist but '" + after +
+                                 "' does: a frame is missing from the numbered sequence (frames after it would be "
+                                 "dropped); restore it, or renumber the files");
+    }
   }
   return files;
 }

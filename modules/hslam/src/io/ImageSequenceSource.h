@@ -30,8 +30,10 @@ public:
 //! True when \e pattern holds exactly one integer conversion ("%d", "%04d", ...) and no other '%'.
 VISP_EXPORT bool isImagePattern(const std::string &pattern);
 /*!
-  Files of a printf pattern: from the first existing number in [0, \e maxFirstIndex) up to the first gap.
-  \exception vpHSlamException::invalidArgument for a malformed pattern.
+  Files of a printf pattern: from the first existing number in [0, \e maxFirstIndex) up to the first gap. A file
+  of the pattern numbered after the gap (a missing frame, whose followers would be dropped silently) is an error.
+  \exception vpHSlamException::invalidArgument for a malformed pattern; vpHSlamException::fileNotFound naming the
+  missing file and the first one after it when the numbering has a gap.
 */
 VISP_EXPORT std::vector<std::string> expandImagePattern(const std::string &pattern, unsigned int maxFirstIndex = 1000);
 } // namespace hslam

@@ -54,7 +54,7 @@ void IndexedImageSource::setFrames(std::vector<IndexedFrame> all, const vpHSlamI
                   all.begin() + static_cast<std::ptrdiff_t>(options.startFrame + count));
   // Fail at open, not half-way through a run, when a listed file is missing.
   for (const IndexedFrame &f : m_frames) {
-    if (!pathIsFile(f.path)) {
+    if (f.entry.empty() && !pathIsFile(f.path)) {
       throw vpHSlamException(vpHSlamException::fileNotFound,
                              "image '" + f.path + "' (listed at " + where(f) + ") does not exist");
     }
@@ -82,7 +82,11 @@ bool IndexedImageSource::acquire(vpImage<unsigned char> &I, Frame &frame)
     return false;
   }
   const IndexedFrame &f = m_frames[m_next];
-  readGreyImage(f.path, I);
+  if (f.entry.empty()) {
+    readGreyImage(f.path, I);
+  } else {
+    readArchivedImage(f, I);
+  }
   if (I.getWidth() != m_camera.getWidth() || I.getHeight() != m_camera.getHeight()) {
     throw vpHSlamException(vpHSlamException::invalidImage,
                            "image '" + f.path + "' is " + std::to_string(I.getWidth()) + "x" +
@@ -95,6 +99,23 @@ bool IndexedImageSource::acquire(vpImage<unsigned char> &I, Frame &frame)
   frame.name = f.path;
   ++m_next;
   return true;
+}
+
+void IndexedImageSource::loadFolderPhotometricCalibration(const std::string &folder)
+{
+  const std::string pcalib = joinPath(folder, "pcalib.txt");
+  const std::string vignette = joinPath(folder, "vignette.png");
+  const bool hasResponse = pathIsFile(pcalib), hasVignette = pathIsFile(vignette);
+  if (hasResponse || hasVignette) {
+    m_photometric.load(hasResponse ? pcalib : std::string(), hasVignette ? vignette : std::string(),
+                       m_camera.getWidth(), m_camera.getHeight());
+  }
+}
+
+void IndexedImageSource::readArchivedImage(const IndexedFrame &frame, vpImage<unsigned char> &)
+{
+  throw vpHSlamException(vpHSlamException::unsupported,
+                         "'" + frame.path + "': this reader does not read images inside archives");
 }
 
 std::string IndexedImageSource::describe() const

@@ -15,7 +15,8 @@ namespace hslam
 {
 //! One frame of an indexed sequence, with where it was listed (for messages).
 struct IndexedFrame {
-  std::string path;      //!< image file
+  std::string path;      //!< image file, or "<archive>:<entry>" for an image inside an archive (for messages)
+  std::string entry;     //!< entry name inside the reader's archive, empty for a file on disk
   double timestamp = 0.; //!< seconds
   double exposure = -1.; //!< milliseconds, <= 0 when unknown
   std::string listFile;  //!< file that listed the frame (rgb.txt, data.csv, times.txt), empty when none
@@ -27,8 +28,9 @@ struct IndexedFrame {
 
   A derived reader parses its lists, loads m_camera (and m_photometric) and hands the full frame list to
   setFrames(), which checks it once (timestamps strictly increasing, every selected file present), applies
-  Options::startFrame / maxFrames and fixes the frame rate. acquire() then reads each file with vpImageIo: a frame
-  is never skipped (unlike vpVideoReader), an unreadable file or a size different from the calibration throws.
+  Options::startFrame / maxFrames and fixes the frame rate. acquire() then reads each file with vpImageIo (or, for
+  frames inside an archive, through readArchivedImage()): a frame is never skipped (unlike vpVideoReader), an
+  unreadable file or a size different from the calibration throws.
 */
 class IndexedImageSource : public vpHSlamImageSource
 {
@@ -66,6 +68,18 @@ protected:
     m_camera =
         options.cameraFile.empty() ? loader(defaultFile) : vpHSlamCamera::load(options.cameraFile, width, height);
   }
+
+  /*!
+    Load the photometric calibration of \e folder into m_photometric when it holds pcalib.txt and/or vignette.png
+    (TUM monoVO names), sized for m_camera: load the camera first. Nothing happens when neither file exists.
+  */
+  void loadFolderPhotometricCalibration(const std::string &folder);
+
+  /*!
+    Read a frame whose IndexedFrame::entry is set (an image inside an archive). Readers that list such frames
+    override it; the default throws vpHSlamException::unsupported.
+  */
+  virtual void readArchivedImage(const IndexedFrame &frame, vpImage<unsigned char> &I);
 
   Format m_format;
   std::string m_root;       //!< path given by the user

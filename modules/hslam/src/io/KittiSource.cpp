@@ -33,7 +33,7 @@ KittiSource::KittiSource(const std::string &path, const vpHSlamImageSource::Opti
   }
   const std::string imageFolder = joinPath(path, "image_0");
   const std::string timesFile = joinPath(path, "times.txt");
-  const std::vector<TextLine> lines = readDataLines(timesFile, "KITTI times list");
+  const std::vector<TextLine> lines = readListLines(timesFile, "KITTI times list");
   const std::vector<std::string> images = listImageFiles(imageFolder);
 
   std::vector<IndexedFrame> frames(lines.size());

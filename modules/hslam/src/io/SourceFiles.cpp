@@ -3,12 +3,17 @@
  */
 #include "io/SourceFiles.h"
 
+#include <visp3/core/vpImageConvert.h>
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/io/vpImageIo.h>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 namespace hslam
 {
@@ -16,6 +21,51 @@ namespace io
 {
 namespace
 {
+// JPEG markers (ITU-T T.81, table B.1): start of image, start of scan, end of image.
+constexpr unsigned char kJpegMarkerPrefix = 0xFF;
+constexpr unsigned char kJpegStartOfImage = 0xD8;
+constexpr unsigned char kJpegStartOfScan = 0xDA;
+constexpr unsigned char kJpegEndOfImage = 0xD9;
+
+bool isJpeg(const std::vector<unsigned char> &bytes)
+{
+  return bytes.size() >= 2 && bytes[0] == kJpegMarkerPrefix && bytes[1] == kJpegStartOfImage;
+}
+
+/*!
+  True when the JPEG's last scan is followed by the end-of-image marker. libjpeg (under both vpImageIo and OpenCV)
+  decodes a truncated file without error, filling the missing part, so a cut file must be caught here. Inside
+  entropy-coded data a 0xFF byte is always followed by 0x00 or a restart marker (T.81 B.1.1.5), hence FF D9 after
+  the last FF DA can only be the real end of the image, and data appended after it (some cameras do) is harmless.
+*/
+bool jpegIsComplete(const std::vector<unsigned char> &bytes)
+{
+  std::size_t lastScan = 0;
+  for (std::size_t i = 0; i + 1 < bytes.size(); ++i) {
+    if (bytes[i] == kJpegMarkerPrefix && bytes[i + 1] == kJpegStartOfScan) {
+      lastScan = i;
+    }
+  }
+  if (lastScan == 0) { // offset 0 holds the start-of-image marker: no scan at all
+    return false;
+  }
+  for (std::size_t i = lastScan; i + 1 < bytes.size(); ++i) {
+    if (bytes[i] == kJpegMarkerPrefix && bytes[i + 1] == kJpegEndOfImage) {
+      return true;
+    }
+  }
+  return false;
+}
+
+void requireCompleteJpeg(const std::vector<unsigned char> &bytes, const std::string &name)
+{
+  if (isJpeg(bytes) && !jpegIsComplete(bytes)) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot decode image '" + name +
+                                                                 "': the JPEG data ends before its end-of-image marker "
+                                                                 "(truncated file)");
+  }
+}
+
 std::string stripTrailingSeparators(const std::string &path)
 {
   std::string p = path;
@@ -126,6 +176,12 @@ void readGreyImage(const std::string &path, vpImage<unsigned char> &I)
   if (!pathIsFile(path)) {
     throw vpHSlamException(vpHSlamException::fileNotFound, "image '" + path + "' does not exist");
   }
+  const std::string ext = lowerExtension(path);
+  if (ext == "jpg" || ext == "jpeg") {
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    requireCompleteJpeg(bytes, path);
+  }
   try {
     vpImageIo::read(I, path);
   } catch (const vpException &e) {
@@ -137,6 +193,42 @@ void readGreyImage(const std::string &path, vpImage<unsigned char> &I)
   if (I.getWidth() == 0 || I.getHeight() == 0) {
     throw vpHSlamException(vpHSlamException::fileUnreadable, "image '" + path + "' decoded to an empty image");
   }
+}
+
+void decodeGreyImage(const std::vector<unsigned char> &bytes, const std::string &name, vpImage<unsigned char> &I)
+{
+  requireCompleteJpeg(bytes, name);
+  cv::Mat grey;
+  try {
+    // IMREAD_GRAYSCALE: colour files converted like the folder readers do, 16-bit files reduced to 8 bits.
+    grey = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+  } catch (const cv::Exception &e) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot decode image '" + name + "': " + e.what());
+  }
+  if (grey.empty() || grey.type() != CV_8UC1) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable,
+                           "cannot decode image '" + name + "' (" + std::to_string(bytes.size()) +
+                               " bytes): not a complete image file in a format OpenCV reads");
+  }
+  vpImageConvert::convert(grey, I);
+}
+
+std::vector<TextLine> readListLines(const std::string &path, const std::string &what)
+{
+  std::vector<TextLine> lines = readDataLines(path, what);
+  std::ifstream in(path, std::ios::binary);
+  const std::string content((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (lines.empty() || content.empty() || content.back() == '\n') {
+    return lines;
+  }
+  const std::size_t lastLine = static_cast<std::size_t>(std::count(content.begin(), content.end(), '\n')) + 1;
+  if (lines.back().number == lastLine) {
+    throwAt(vpHSlamException::parseError, path, lastLine,
+            "the last line '" + lines.back().text +
+                "' has no end of line: the list looks truncated (cut during a copy or download?); if the line is "
+                "complete, end it with a newline");
+  }
+  return lines;
 }
 } // namespace io
 } // namespace hslam

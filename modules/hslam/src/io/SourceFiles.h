@@ -6,6 +6,8 @@
 #ifndef HSLAM_IO_SOURCE_FILES_H
 #define HSLAM_IO_SOURCE_FILES_H
 
+#include "common/TextParsing.h"
+
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
 
@@ -45,10 +47,27 @@ VISP_EXPORT std::vector<std::string> listImageFiles(const std::string &folder);
 
 /*!
   Read one image as 8-bit grey (ViSP's readers convert colour files).
-  \exception vpHSlamException::fileNotFound when missing, fileUnreadable when it cannot be decoded or is empty,
-  both naming \e path.
+  \exception vpHSlamException::fileNotFound when missing, fileUnreadable when it cannot be decoded, is empty, or is
+  a JPEG cut before its end-of-image marker (which libjpeg would decode without error), all naming \e path.
 */
 VISP_EXPORT void readGreyImage(const std::string &path, vpImage<unsigned char> &I);
+
+/*!
+  Decode an encoded image held in memory (PNG, JPEG, ... as read from an archive) to 8-bit grey.
+  \param bytes : the encoded file.
+  \param name : what to call it in messages ("images.zip:00012.png").
+  \exception vpHSlamException::fileUnreadable naming \e name when it cannot be decoded or is a truncated JPEG.
+*/
+void decodeGreyImage(const std::vector<unsigned char> &bytes, const std::string &name, vpImage<unsigned char> &I);
+
+/*!
+  The data lines of an image or time list (readDataLines()), refusing a list whose last data line has no end of
+  line: that is how a list cut during a copy or download ends, and a line cut inside its last number still parses
+  (a timestamp "1.2345e+01" cut to "1.23"), so the cut must be caught here rather than by the line's content.
+  \exception as readDataLines(); vpHSlamException::parseError naming the file and the line for an unterminated
+  last data line.
+*/
+std::vector<TextLine> readListLines(const std::string &path, const std::string &what);
 } // namespace io
 } // namespace hslam
 

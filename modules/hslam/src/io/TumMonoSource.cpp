@@ -8,6 +8,7 @@
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cstdint>
 
@@ -37,61 +38,80 @@ TumMonoSource::TumMonoSource(const std::string &path, const vpHSlamImageSource::
   if (!pathIsDirectory(path)) {
     throw vpHSlamException(vpHSlamException::fileNotFound, "TUM monoVO folder '" + path + "' does not exist");
   }
+  // images/ first: an unpacked folder is what the user last worked on when both exist.
   const std::string imageFolder = joinPath(path, "images");
-  if (!pathIsDirectory(imageFolder)) {
-    const std::string zip = joinPath(path, "images.zip");
-    if (pathIsFile(zip)) {
-      throw vpHSlamException(vpHSlamException::unsupported,
-                             "'" + zip +
-                                 "' cannot be read directly (no zip support in this build): unzip images.zip "
-                                 "into images/ (cd '" +
-                                 path + "' && mkdir images && unzip -q images.zip -d images)");
+  const std::string zipFile = joinPath(path, "images.zip");
+  std::vector<std::string> images;
+  std::string imageSource;
+  if (pathIsDirectory(imageFolder)) {
+    images = listImageFiles(imageFolder);
+    imageSource = imageFolder;
+  } else if (pathIsFile(zipFile)) {
+    m_archive = std::make_unique<io::ZipArchive>(zipFile);
+    for (const std::string &name : m_archive->fileNames()) {
+      if (hasImageExtension(name) && baseName(name).front() != '.') {
+        images.push_back(name);
+      }
     }
-    throw vpHSlamException(vpHSlamException::fileNotFound, "TUM monoVO folder '" + path + "' has no images/");
+    std::sort(images.begin(), images.end());
+    imageSource = zipFile;
+  } else {
+    throw vpHSlamException(vpHSlamException::fileNotFound,
+                           "TUM monoVO folder '" + path + "' has neither images/ nor images.zip");
   }
   loadCamera(options, joinPath(path, "camera.txt"),
              [](const std::string &file) { return vpHSlamCamera::loadDso(file); });
+  loadFolderPhotometricCalibration(path);
 
-  const std::string pcalib = joinPath(path, "pcalib.txt");
-  const std::string vignette = joinPath(path, "vignette.png");
-  if (pathIsFile(pcalib) || pathIsFile(vignette)) {
-    m_photometric.load(pathIsFile(pcalib) ? pcalib : std::string(), pathIsFile(vignette) ? vignette : std::string(),
-                       m_camera.getWidth(), m_camera.getHeight());
-  }
-
-  const std::vector<std::string> images = listImageFiles(imageFolder);
   const std::string timesFile = joinPath(path, "times.txt");
-  const std::vector<TextLine> lines = readDataLines(timesFile, "TUM monoVO times list");
-  if (lines.size() != images.size()) {
-    throw vpHSlamException(vpHSlamException::invalidTimestamps,
-                           "'" + timesFile + "' has " + std::to_string(lines.size()) + " lines but '" + imageFolder +
-                               "' holds " + std::to_string(images.size()) + " images");
-  }
-
-  std::vector<IndexedFrame> frames(images.size());
-  for (std::size_t i = 0; i < images.size(); ++i) {
+  const std::vector<TextLine> lines = readListLines(timesFile, "TUM monoVO times list");
+  // Pairs first, counts after: with numbered images, the first id out of step names the missing image.
+  std::vector<IndexedFrame> frames(std::min(lines.size(), images.size()));
+  std::size_t columns = 0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
     const TextLine &line = lines[i];
     const std::vector<std::string> fields = splitTokens(line.text, " \t");
-    if (fields.size() < 2) {
-      throw vpHSlamException(vpHSlamException::parseError, fileLine(timesFile, line.number) +
-                                                               ": expected 'id time [exposure]', got '" + line.text +
-                                                               "'");
+    if (fields.size() < 2 || fields.size() > 3 || (columns != 0 && fields.size() != columns)) {
+      throw vpHSlamException(vpHSlamException::parseError,
+                             fileLine(timesFile, line.number) + ": expected 'id time [exposure]'" +
+                                 (columns != 0 ? " with " + std::to_string(columns) + " columns like line " +
+                                                     std::to_string(lines.front().number)
+                                               : std::string()) +
+                                 ", got '" + line.text + "'");
     }
+    columns = fields.size();
     const std::string stem = stemName(images[i]);
     // Pairing is by order; a numbered image whose number differs from the line's id means a list out of step.
     if (isDigits(fields[0]) && isDigits(stem) &&
         parseUInt64(fields[0], timesFile, line.number, "id") != parseUInt64(stem, images[i], 0, "image number")) {
-      throw vpHSlamException(vpHSlamException::invalidTimestamps, fileLine(timesFile, line.number) + ": id " +
-                                                                      fields[0] + " does not match image '" +
-                                                                      images[i] + "' at the same position");
+      throw vpHSlamException(vpHSlamException::invalidTimestamps,
+                             fileLine(timesFile, line.number) + ": id " + fields[0] + " does not match image '" +
+                                 images[i] + "' at the same position: image " + fields[0] + " missing from '" +
+                                 imageSource + "', or a line too many");
     }
     IndexedFrame &f = frames[i];
-    f.path = joinPath(imageFolder, images[i]);
+    if (m_archive) {
+      f.path = zipFile + ":" + images[i];
+      f.entry = images[i];
+    } else {
+      f.path = joinPath(imageFolder, images[i]);
+    }
     f.timestamp = parseDouble(fields[1], timesFile, line.number, "time [s]");
     f.exposure = fields.size() >= 3 ? parseDouble(fields[2], timesFile, line.number, "exposure [ms]") : -1.;
     f.listFile = timesFile;
     f.line = line.number;
   }
+  if (lines.size() != images.size()) {
+    throw vpHSlamException(vpHSlamException::invalidTimestamps,
+                           "'" + timesFile + "' has " + std::to_string(lines.size()) + " lines but '" + imageSource +
+                               "' holds " + std::to_string(images.size()) + " images");
+  }
   setFrames(std::move(frames), options);
+}
+
+void TumMonoSource::readArchivedImage(const IndexedFrame &frame, vpImage<unsigned char> &I)
+{
+  m_archive->read(frame.entry, m_encoded);
+  decodeGreyImage(m_encoded, frame.path, I);
 }
 } // namespace hslam

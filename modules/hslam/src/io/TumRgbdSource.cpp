@@ -8,9 +8,66 @@
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <sstream>
+
 namespace hslam
 {
 using namespace io;
+
+namespace
+{
+/*!
+  Largest difference between a frame's time in rgb.txt and in times.txt, seconds: both lists are written with
+  microseconds (TUM RGB-D's 6 decimals), so equal stamps differ by rounding only.
+*/
+constexpr double kTimeMatchTolerance = 1e-6;
+
+bool isDigits(const std::string &s)
+{
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+}
+
+/*!
+  H-SLAM extension of the layout: exposures from an optional times.txt ("id time[s] exposure[ms]"), one line per
+  rgb.txt frame in the same order, as tutorial-hslam-synthetic writes it.
+*/
+void readExposures(const std::string &timesFile, const std::string &list, std::vector<IndexedFrame> &frames)
+{
+  const std::vector<TextLine> lines = readListLines(timesFile, "exposure list");
+  if (lines.size() != frames.size()) {
+    throw vpHSlamException(vpHSlamException::invalidTimestamps,
+                           "'" + timesFile + "' has " + std::to_string(lines.size()) + " lines but '" + list +
+                               "' lists " + std::to_string(frames.size()) + " images: one exposure per frame");
+  }
+  for (std::size_t i = 0; i < lines.size(); ++i) {
+    const TextLine &line = lines[i];
+    IndexedFrame &f = frames[i];
+    const std::vector<std::string> fields = splitTokens(line.text, " \t");
+    if (fields.size() != 3) {
+      throw vpHSlamException(vpHSlamException::parseError, fileLine(timesFile, line.number) +
+                                                               ": expected 'id time[s] exposure[ms]', got '" +
+                                                               line.text + "'");
+    }
+    const double time = parseDouble(fields[1], timesFile, line.number, "time [s]");
+    const std::string stem = stemName(f.path);
+    const bool idMismatch =
+        isDigits(fields[0]) && isDigits(stem) &&
+        parseUInt64(fields[0], timesFile, line.number, "id") != parseUInt64(stem, f.path, 0, "image number");
+    if (idMismatch || !(std::abs(time - f.timestamp) <= kTimeMatchTolerance)) {
+      std::ostringstream msg;
+      msg.precision(17);
+      msg << fileLine(timesFile, line.number) << ": '" << line.text << "' does not match frame " << i << " of "
+          << fileLine(list, f.line) << " (time " << f.timestamp << " s, image '" << baseName(f.path)
+          << "'): times.txt must list the frames of rgb.txt, in the same order";
+      throw vpHSlamException(vpHSlamException::invalidTimestamps, msg.str());
+    }
+    f.exposure = parseDouble(fields[2], timesFile, line.number, "exposure [ms]");
+  }
+}
+} // namespace
 
 std::string findFolderCameraFile(const std::string &folder, const vpHSlamImageSource::Options &options)
 {
@@ -40,7 +97,7 @@ TumRgbdSource::TumRgbdSource(const std::string &path, const vpHSlamImageSource::
   }
   const std::string list = joinPath(path, "rgb.txt");
   std::vector<IndexedFrame> frames;
-  for (const TextLine &line : readDataLines(list, "TUM RGB-D image list")) {
+  for (const TextLine &line : readListLines(list, "TUM RGB-D image list")) {
     const std::vector<std::string> fields = splitTokens(line.text, " \t");
     if (fields.size() < 2) {
       throw vpHSlamException(vpHSlamException::parseError,
@@ -64,6 +121,11 @@ TumRgbdSource::TumRgbdSource(const std::string &path, const vpHSlamImageSource::
   loadCamera(
       withCamera, cameraFile, [](const std::string &file) { return vpHSlamCamera::load(file); }, first.getWidth(),
       first.getHeight());
+  loadFolderPhotometricCalibration(path);
+  const std::string timesFile = joinPath(path, "times.txt");
+  if (pathIsFile(timesFile)) {
+    readExposures(timesFile, list, frames);
+  }
   setFrames(std::move(frames), options);
 }
 } // namespace hslam

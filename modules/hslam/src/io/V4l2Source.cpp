@@ -40,10 +40,12 @@ const PixelFormat kPreferredFormats[] = {{V4L2_PIX_FMT_YUYV, vpV4l2Grabber::V4L2
                                          {V4L2_PIX_FMT_RGB24, vpV4l2Grabber::V4L2_RGB24_FORMAT, "RGB24"},
                                          {V4L2_PIX_FMT_RGB32, vpV4l2Grabber::V4L2_RGB32_FORMAT, "RGB32"}};
 
-const __u32 kMaxEnumeratedFormats = 64; //!< bound on VIDIOC_ENUM_FMT, far above what a camera lists
-const unsigned int kGrabberBuffers = 3; //!< ViSP's advice for real-time capture (vpV4l2Grabber::setNBuffers)
-const unsigned int kCameraInput = 0;    //!< webcams have a single input; ViSP's default (2) is for TV boards
-const double kMicrosecond = 1e-6;       //!< struct timeval unit, seconds
+const __u32 kMaxEnumeratedFormats = 64;  //!< bound on VIDIOC_ENUM_FMT, far above what a camera lists
+const unsigned int kGrabberBuffers = 3;  //!< ViSP's advice for real-time capture (vpV4l2Grabber::setNBuffers)
+const unsigned int kCameraInput = 0;     //!< webcams have a single input; ViSP's default (2) is for TV boards
+const double kMicrosecond = 1e-6;        //!< struct timeval unit, seconds
+const unsigned int kDefaultWidth = 640;  //!< requested without a chosen size or a camera file: VGA, which
+const unsigned int kDefaultHeight = 480; //!< virtually every webcam offers
 
 std::string sizeText(unsigned int width, unsigned int height)
 {
@@ -198,13 +200,14 @@ class V4l2Source : public vpHSlamImageSource
 public:
   V4l2Source(const std::string &device, const Options &options) : m_device(device), m_options(options)
   {
-    if (options.width == 0 || options.height == 0) {
-      throw vpHSlamException(vpHSlamException::invalidArgument, "V4L2 device '" + device + "': requested size " +
-                                                                    sizeText(options.width, options.height) +
-                                                                    " is empty");
+    if ((options.width == 0) != (options.height == 0)) {
+      throw vpHSlamException(vpHSlamException::invalidArgument,
+                             "V4L2 device '" + device + "': requested size " + sizeText(options.width, options.height) +
+                                 " gives one dimension only; give both, or neither (the camera file's size, else " +
+                                 sizeText(kDefaultWidth, kDefaultHeight) + ")");
     }
-    loadCamera(); // before touching the device: a bad file fails fast
-    m_probe = probeDevice(device, options.width, options.height);
+    loadCamera(); // before touching the device: a bad file fails fast; also fixes the size when none was chosen
+    m_probe = probeDevice(device, m_options.width, m_options.height);
     openGrabber();
   }
 
@@ -271,17 +274,29 @@ public:
   }
 
 private:
+  //! Camera, and the size to request when the caller chose none (Options::width = height = 0).
   void loadCamera()
   {
-    const unsigned int width = m_options.width, height = m_options.height;
+    const bool sizeChosen = m_options.width > 0;
     if (m_options.cameraFile.empty()) {
+      if (!sizeChosen) {
+        m_options.width = kDefaultWidth;
+        m_options.height = kDefaultHeight;
+      }
+      const unsigned int width = m_options.width, height = m_options.height;
       const double focal = width; // see createV4l2Source(): fx = fy = width is the documented guess
       m_camera =
           vpHSlamCamera(vpHSlamCamera::pinhole, width, height, focal, focal, 0.5 * (width - 1.), 0.5 * (height - 1.));
       m_cameraGuessed = true;
       return;
     }
-    m_camera = vpHSlamCamera::load(m_options.cameraFile, width, height);
+    // A chosen size serves the calibration formats that do not store one (KITTI calib.txt).
+    m_camera = vpHSlamCamera::load(m_options.cameraFile, m_options.width, m_options.height);
+    if (!sizeChosen) {
+      m_options.width = m_camera.getWidth();
+      m_options.height = m_camera.getHeight();
+    }
+    const unsigned int width = m_options.width, height = m_options.height;
     if (m_camera.getWidth() != width || m_camera.getHeight() != height) {
       throw vpHSlamException(vpHSlamException::invalidCalibration,
                              "camera file '" + m_options.cameraFile + "' is for " +
@@ -361,7 +376,7 @@ private:
   }
 
   std::string m_device;
-  Options m_options;
+  Options m_options; //!< as given, with the size resolved by loadCamera() (never 0 after construction)
   vpHSlamCamera m_camera;
   bool m_cameraGuessed = false;
   vpHSlamPhotometricCalibration m_photometric; //!< always empty: a live camera has no photometric calibration

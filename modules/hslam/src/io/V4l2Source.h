@@ -17,9 +17,11 @@ namespace hslam
   Open a live V4L2 camera (e.g. "/dev/video0") as a vpHSlamImageSource. vpHSlamImageSource::create() calls this
   for formatV4l2; tests call it directly.
 
-  - Size: Options::width x Options::height. The device is probed before streaming; if it imposes another size
-    (V4L2 drivers adjust a request silently, and vpV4l2Grabber would then copy a wrongly strided image or read past
-    the driver's buffer), vpHSlamException::deviceError names the device, the requested and the delivered size.
+  - Size: Options::width x Options::height when given (both non-zero); when both are 0 (the default), the camera
+    file's size if Options::cameraFile is given, else 640x480. Only one of them 0 is invalidArgument. The device is
+  probed before streaming; if it imposes another size (V4L2 drivers adjust a request silently, and vpV4l2Grabber would
+  then copy a wrongly strided image or read past the driver's buffer), vpHSlamException::deviceError names the device,
+  the requested and the delivered size.
   - Pixel format: the first one the device lists among YUYV (luma copied exactly), GREY (exact), BGR24, RGB24,
     RGB32 (converted to grey by ViSP, rounding of +-1 grey level). Emulated formats of libv4l2 count (an MJPEG-only
     camera is read as RGB24/BGR24).

@@ -130,9 +130,10 @@ std::unique_ptr<vpHSlamImageSource> vpHSlamImageSource::create(const std::string
   if (!pathIsFile(path) && !pathIsDirectory(path)) {
     throw vpHSlamException(vpHSlamException::fileNotFound, "input '" + path + "' does not exist");
   }
-  throw vpHSlamException(vpHSlamException::unsupported,
-                         "cannot recognise the format of '" + path +
-                             "': expected an EuRoC/TUM-VI (mav0/cam0/data.csv), TUM monoVO (times.txt + images/), "
-                             "TUM RGB-D (rgb.txt), KITTI (times.txt + image_0/) or image folder, a printf pattern, "
-                             "a video file or /dev/videoN; or give the format explicitly (--format)");
+  throw vpHSlamException(
+      vpHSlamException::unsupported,
+      "cannot recognise the format of '" + path +
+          "': expected an EuRoC/TUM-VI (mav0/cam0/data.csv), TUM monoVO (times.txt + images/ or images.zip), "
+          "TUM RGB-D (rgb.txt), KITTI (times.txt + image_0/) or image folder, a printf pattern, "
+          "a video file or /dev/videoN; or give the format explicitly (--format)");
 }

@@ -30,11 +30,13 @@
   Readers never skip or shift a frame silently: a missing, unreadable or corrupt image, an unparsable line,
   non-increasing timestamps, a list and a folder of different lengths, or an image whose size differs from the
   calibration raise vpHSlamException naming the file (and line). Lists are checked when the source is created
-  (missing files included), image contents when acquire() reads them. The end of a sequence is not an error:
-  acquire() returns false.
+  (missing files included), image contents when acquire() reads them. A list whose last line has no end of line is
+  refused as truncated (a line cut inside its last number would still parse). The end of a sequence is not an
+  error: acquire() returns false.
 
-  Dataset images are read one by one with vpImageIo, never through vpVideoReader, which silently skips unreadable
-  frames; vpVideoReader serves video files only.
+  Dataset images are read one by one with vpImageIo (TUM monoVO's images.zip: decompressed with libzip and decoded
+  in memory), never through vpVideoReader, which silently skips unreadable frames; vpVideoReader serves video files
+  only.
 
   Threading: a source is used from one thread at a time.
 
@@ -62,9 +64,10 @@ public:
   enum Format {
     formatAuto,    //!< detect from the folder's content
     formatEuroc,   //!< EuRoC / TUM-VI ASL: mav0/cam0/data.csv + data/ + sensor.yaml (or the cam0 folder)
-    formatTumMono, //!< TUM monoVO: images/, times.txt, camera.txt [, pcalib.txt, vignette.png]; images.zip alone
-                   //!< is refused (vpHSlamException::unsupported: unzip it into images/)
-    formatTumRgbd, //!< TUM RGB-D: rgb.txt + camera.txt or camera.xml in the folder, or Options::cameraFile
+    formatTumMono, //!< TUM monoVO: images/ or images.zip (read in place, entries sorted by name), times.txt,
+                   //!< camera.txt [, pcalib.txt, vignette.png]; images/ wins when both exist
+    formatTumRgbd, //!< TUM RGB-D: rgb.txt + camera.txt or camera.xml in the folder, or Options::cameraFile; H-SLAM
+                   //!< extension: optional pcalib.txt / vignette.png and times.txt (id time exposure_ms per frame)
     formatKitti,   //!< KITTI odometry: image_0/, times.txt, calib.txt (P0); size from the first image
     formatImages,  //!< image folder (sorted by name) or printf pattern; camera file and frame rate required
     formatVideo,   //!< video file through vpVideoReader, with a camera file and a frame rate
@@ -78,8 +81,10 @@ public:
     double frameRate = 30.;     //!< Hz, for formats without timestamps (images, video): frame i is at i / frameRate s
     unsigned int startFrame = 0; //!< first frame to deliver (0-based in the sequence; timestamps are unchanged)
     unsigned int maxFrames = 0;  //!< stop after this many frames (0 = all)
-    unsigned int width = 640;    //!< requested live image width, pixels (V4L2)
-    unsigned int height = 480;   //!< requested live image height, pixels (V4L2)
+    //! Requested live image width, pixels (V4L2). 0 with height 0: not chosen, i.e. the size of cameraFile when
+    //! given, else 640x480. Ignored by the other formats (their images have the size they have).
+    unsigned int width = 0;
+    unsigned int height = 0; //!< requested live image height, pixels (V4L2); 0 with width 0: see width
   };
 
   virtual ~vpHSlamImageSource();
