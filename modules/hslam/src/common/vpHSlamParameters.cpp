@@ -142,6 +142,7 @@ const Field kFields[] = {
   HSLAM_PARAM(initializer, ransacConfidence, openInterval(0., 1.), "RANSAC confidence"),
   HSLAM_PARAM(initializer, maxFramesToInitialize, atLeast(1), "restart with a new first frame after this many"),
   HSLAM_PARAM(initializer, initialIdepth, positive(), "median inverse depth of the first map, 1/m"),
+  HSLAM_PARAM(initializer, orbFeatures, atLeast(8), "ORB features per frame while initialising"),
 
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),

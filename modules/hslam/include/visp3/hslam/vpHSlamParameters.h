@@ -51,81 +51,82 @@ public:
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
   struct Features {
-    int desiredPointDensity = 2000;     //!< target number of active points in the window (DSO)
-    int desiredImmatureDensity = 1500;  //!< candidates selected per new keyframe (DSO)
-    int selectionBlockSize = 32;        //!< side of the blocks of the region-adaptive gradient threshold, pixels
-    double gradientThresholdAdd = 7.;   //!< threshold = block median of |grad| + this, intensity units (DSO)
+    int desiredPointDensity = 2000;    //!< target number of active points in the window (DSO)
+    int desiredImmatureDensity = 1500; //!< candidates selected per new keyframe (DSO)
+    int selectionBlockSize = 32;       //!< side of the blocks of the region-adaptive gradient threshold, pixels
+    double gradientThresholdAdd = 7.;  //!< threshold = block median of |grad| + this, intensity units (DSO)
     double gradientThresholdLevelFactor = 0.75; //!< threshold multiplier per coarser selection level (DSO)
-    int selectionLevels = 3;            //!< pyramid levels used for selection (DSO: 3 "potential" sizes)
-    int fastThreshold = 7;              //!< FAST intensity threshold (ARCHITECTURE.md)
-    int maxCorners = 1000;              //!< FAST corners kept per keyframe
-    double cornerMinDistance = 4.;      //!< non-maximum suppression radius between corners, pixels
+    int selectionLevels = 3;                    //!< pyramid levels used for selection (DSO: 3 "potential" sizes)
+    int fastThreshold = 7;                      //!< FAST intensity threshold (ARCHITECTURE.md)
+    int maxCorners = 1000;                      //!< FAST corners kept per keyframe
+    double cornerMinDistance = 4.;              //!< non-maximum suppression radius between corners, pixels
   };
 
   //! Direct (and later joint) pose tracking against the newest keyframe.
   struct Tracker {
-    int maxPyramidLevels = 6;           //!< upper bound on pyramid levels
-    int minCoarsestPixels = 5000;       //!< a level is added only while it keeps this many pixels (DSO)
-    double huberThreshold = 9.;         //!< Huber threshold on photometric residuals, intensity units (DSO)
-    double gradientWeightC = 50.;       //!< gradient weight c^2/(c^2+|g|^2), c in intensity units (DSO)
+    int maxPyramidLevels = 6;            //!< upper bound on pyramid levels
+    int minCoarsestPixels = 5000;        //!< a coarser level is added while the coarsest one has more pixels (DSO)
+    double huberThreshold = 9.;          //!< Huber threshold on photometric residuals, intensity units (DSO)
+    double gradientWeightC = 50.;        //!< gradient weight c^2/(c^2+|g|^2), c in intensity units (DSO)
     double outlierEnergyPerPixel = 144.; //!< residual^2 above which a pattern pixel is an outlier: 12^2 (DSO)
     std::vector<int> iterationsPerLevel = {10, 20, 50, 50, 50}; //!< Gauss-Newton iterations, finest level first (DSO)
-    double retrackResidualFactor = 1.5; //!< try other motion hypotheses when the residual exceeds this times the last
-    double affinePriorA = 0.;           //!< prior weight on a (0 = free; DSO mode 1 without calibration)
-    double affinePriorB = 0.;           //!< prior weight on b (0 = free)
+    double retrackResidualFactor = 1.5;   //!< try other motion hypotheses when the residual exceeds this times the last
+    double affinePriorA = 0.;             //!< prior weight on a (0 = free; DSO mode 1 without calibration)
+    double affinePriorB = 0.;             //!< prior weight on b (0 = free)
     double affinePriorACalibrated = 1e12; //!< prior weight on a with photometric calibration (DSO: fixed)
     double affinePriorBCalibrated = 1e8;  //!< prior weight on b with photometric calibration (DSO)
-    double maxShiftWeightT = 0.04;      //!< keyframe decision: translation flow weight, per (w+h) (DSO)
-    double maxShiftWeightR = 0.0;       //!< keyframe decision: rotation flow weight, per (w+h) (DSO)
-    double maxShiftWeightRT = 0.02;     //!< keyframe decision: rotation+translation flow weight, per (w+h) (DSO)
-    double maxAffineWeight = 2.;        //!< keyframe decision: brightness change weight (DSO)
-    double keyframeResidualFactor = 2.; //!< keyframe when the RMSE exceeds this times the keyframe's first RMSE
-    int maxFramesBetweenKeyframes = 0;  //!< force a keyframe after this many frames (0 = never)
-    double coarseCutoffResidual = 20.;  //!< coarse tracking: single-pixel residuals above this are saturated (DSO 20)
+    double maxShiftWeightT = 0.04;        //!< keyframe decision: translation flow weight, per (w+h) (DSO)
+    double maxShiftWeightR = 0.0;         //!< keyframe decision: rotation flow weight, per (w+h) (DSO)
+    double maxShiftWeightRT = 0.02;       //!< keyframe decision: rotation+translation flow weight, per (w+h) (DSO)
+    double maxAffineWeight = 2.;          //!< keyframe decision: brightness change weight (DSO)
+    double keyframeResidualFactor = 2.;   //!< keyframe when the RMSE exceeds this times the keyframe's first RMSE
+    int maxFramesBetweenKeyframes = 0;    //!< force a keyframe after this many frames (0 = never)
+    double coarseCutoffResidual = 20.;    //!< coarse tracking: single-pixel residuals above this are saturated (DSO 20)
   };
 
   //! Sliding-window photometric bundle adjustment, point management and marginalisation.
   struct Mapper {
-    int windowSize = 7;                 //!< keyframes in the window (paper: 7)
-    int minWindowSize = 5;              //!< marginalisation keeps at least this many keyframes (DSO)
-    int maxOptimizationIterations = 6;  //!< LM iterations per new keyframe (DSO)
-    int minOptimizationIterations = 1;  //!< (DSO)
-    double initialLambda = 1e-5;        //!< LM damping start (DSO)
-    double stepConvergenceThreshold = 1e-5; //!< stop when the scaled update norm is below this
-    double minPointsFractionKept = 0.05; //!< marginalise a keyframe keeping fewer of its points (DSO: 5 %)
-    double maxAffineChangeMarginalize = 0.7; //!< marginalise when |a_ji| changes beyond this log-ratio (DSO)
-    double minIdepthHessianActivate = 100.; //!< inverse-depth Hessian needed to keep a new point (DSO)
+    int windowSize = 7;                       //!< keyframes in the window (paper: 7)
+    int minWindowSize = 5;                    //!< marginalisation keeps at least this many keyframes (DSO)
+    int maxOptimizationIterations = 6;        //!< LM iterations per new keyframe (DSO)
+    int minOptimizationIterations = 1;        //!< (DSO)
+    double initialLambda = 1e-5;              //!< LM damping start (DSO)
+    double stepConvergenceThreshold = 1e-5;   //!< stop when the scaled update norm is below this
+    double minPointsFractionKept = 0.05;      //!< marginalise a keyframe keeping fewer of its points (DSO: 5 %)
+    double maxAffineChangeMarginalize = 0.7;  //!< marginalise when |a_ji| changes beyond this log-ratio (DSO)
+    double minIdepthHessianActivate = 100.;   //!< inverse-depth Hessian needed to keep a new point (DSO)
     double minIdepthHessianMarginalize = 50.; //!< below: drop a point instead of marginalising it (DSO)
-    double activationMinDistance = 2.;  //!< initial distance-map radius for activation, pixels (adapted, DSO)
-    double traceMinImprovementFactor = 2.; //!< DSO setting_trace_minImprovementFactor
-    double traceSlackInterval = 1.5;    //!< search interval slack, pixels (DSO)
-    double traceStepSize = 1.;          //!< epipolar search step, pixels (DSO)
-    int traceGaussNewtonIterations = 3; //!< sub-pixel refinement iterations (DSO)
-    double traceGaussNewtonThreshold = 0.1; //!< stop refinement below this step, pixels (DSO)
-    double traceExtraSlackOnThreshold = 1.2; //!< outlier threshold slack for tracing (DSO)
-    double minTraceQuality = 3.;        //!< quality (second best / best) required to activate (DSO)
-    double maxTraceInterval = 8.;       //!< pixel length of the interval below which a point may activate (DSO)
-    double outlierResidualFraction = 0.3; //!< a point with more than this fraction of outlier residuals is removed
-    double traceMaxPixelSearch = 0.027; //!< longest epipolar segment searched, fraction of (width + height) (DSO)
+    double activationMinDistance = 2.;        //!< initial distance-map radius for activation, pixels (adapted, DSO)
+    double traceMinImprovementFactor = 2.;    //!< DSO setting_trace_minImprovementFactor
+    double traceSlackInterval = 1.5;          //!< search interval slack, pixels (DSO)
+    double traceStepSize = 1.;                //!< epipolar search step, pixels (DSO)
+    int traceGaussNewtonIterations = 3;       //!< sub-pixel refinement iterations (DSO)
+    double traceGaussNewtonThreshold = 0.1;   //!< stop refinement below this step, pixels (DSO)
+    double traceExtraSlackOnThreshold = 1.2;  //!< outlier threshold slack for tracing (DSO)
+    double minTraceQuality = 3.;              //!< quality (second best / best) required to activate (DSO)
+    double maxTraceInterval = 8.;             //!< pixel length of the interval below which a point may activate (DSO)
+    double outlierResidualFraction = 0.3;     //!< a point with more than this fraction of outlier residuals is removed
+    double traceMaxPixelSearch = 0.027;       //!< longest epipolar segment searched, fraction of (width + height) (DSO)
   };
 
   //! Monocular initialisation (two-view from feature matches, then photometric refinement).
   struct Initializer {
-    int minMatches = 80;                //!< ORB matches needed to attempt a two-view solution
-    double minParallaxDeg = 1.0;        //!< median triangulation angle required, degrees
-    double ransacThresholdPx = 1.0;     //!< RANSAC inlier threshold on the epipolar / homography error, pixels
-    double ransacConfidence = 0.999;    //!< RANSAC confidence
-    int maxFramesToInitialize = 60;     //!< give up and restart with a new first frame after this many, frames
-    double initialIdepth = 1.;          //!< scale: the median inverse depth of the first map is set to this, 1/m
+    int minMatches = 80;             //!< ORB matches needed to attempt a two-view solution
+    double minParallaxDeg = 1.0;     //!< median triangulation angle required, degrees
+    double ransacThresholdPx = 1.0;  //!< RANSAC inlier threshold on the epipolar / homography error, pixels
+    double ransacConfidence = 0.999; //!< RANSAC confidence
+    int maxFramesToInitialize = 60;  //!< give up and restart with a new first frame after this many, frames
+    double initialIdepth = 1.;       //!< scale: the median inverse depth of the first map is set to this, 1/m
+    int orbFeatures = 1000;          //!< ORB features per frame while initialising (ORB-SLAM2 TUM/EuRoC: 1000)
   };
 
   //! System-wide behaviour.
   struct System {
-    Mode mode = modeVoStrict;           //!< see Mode (odometry only until loop closure exists)
-    bool deterministic = false;         //!< map in the caller's thread: identical output run to run
-    int workerThreads = 0;              //!< threads for residual accumulation (0 = off, run in the caller)
+    Mode mode = modeVoStrict;              //!< see Mode (odometry only until loop closure exists)
+    bool deterministic = false;            //!< map in the caller's thread: identical output run to run
+    int workerThreads = 0;                 //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
-    int maxTrackingFailures = 3;        //!< failed alignments in a row (pose predicted, DSO) before tracking is lost
+    int maxTrackingFailures = 3;           //!< failed alignments in a row (pose predicted, DSO) before tracking is lost
   };
 
   Features features;
