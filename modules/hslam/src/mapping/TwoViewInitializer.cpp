@@ -76,6 +76,45 @@ struct Hypothesis {
   Eigen::Matrix3d R;
   Eigen::Vector3d t;
 };
+
+/*!
+  Every (current, first) descriptor pair: best and second-best first-frame distance per current descriptor, best
+  current descriptor per first-frame one. Compiled twice (function multi-versioning): with the POPCNT instruction
+  and for the baseline x86-64 the build targets, where __builtin_popcountll is a libgcc call several times slower;
+  the loader picks the version the CPU supports.
+*/
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__linux__)
+__attribute__((target_clones("popcnt", "default")))
+#endif
+void bruteForceHamming(const uint64_t *cur, int nCur, const uint64_t *first, int nFirst, int *bestFirstOfCur,
+                       int *bestDistOfCur, int *secondDistOfCur, int *bestCurOfFirst, int *bestDistOfFirst)
+{
+  for (int i = 0; i < nCur; ++i) {
+    const uint64_t *di = cur + static_cast<size_t>(i) * kOrbDescriptorWords;
+    int best = std::numeric_limits<int>::max(), second = best, bestJ = -1;
+    for (int j = 0; j < nFirst; ++j) {
+      const uint64_t *dj = first + static_cast<size_t>(j) * kOrbDescriptorWords;
+      int dist = 0;
+      for (int w = 0; w < kOrbDescriptorWords; ++w) {
+        dist += __builtin_popcountll(di[w] ^ dj[w]);
+      }
+      if (dist < best) {
+        second = best;
+        best = dist;
+        bestJ = j;
+      } else if (dist < second) {
+        second = dist;
+      }
+      if (dist < bestDistOfFirst[j]) {
+        bestDistOfFirst[j] = dist;
+        bestCurOfFirst[j] = i;
+      }
+    }
+    bestFirstOfCur[i] = bestJ;
+    bestDistOfCur[i] = best;
+    secondDistOfCur[i] = second;
+  }
+}
 } // namespace
 
 TwoViewInitializer::TwoViewInitializer(const vpHSlamParameters::Initializer &params, const PinholeIntrinsics &K,
@@ -178,7 +217,8 @@ void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints
   // distances (ratio test) and each first-frame descriptor its best current one (mutual check). Twice as fast as
   // cv::BFMatcher's knnMatch + match, which computes every distance twice.
   if (descriptors.cols != kOrbDescriptorWords * static_cast<int>(sizeof(uint64_t)) || descriptors.type() != CV_8U ||
-      !descriptors.isContinuous() || m_firstDescriptors.cols != descriptors.cols) {
+      !descriptors.isContinuous() || !m_firstDescriptors.isContinuous() ||
+      m_firstDescriptors.cols != descriptors.cols) {
     throw vpHSlamException(vpHSlamException::unsupported, where(__LINE__) + "ORB descriptors must be 32 bytes");
   }
   const int nCur = descriptors.rows, nFirst = m_firstDescriptors.rows;
@@ -186,31 +226,9 @@ void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints
   std::vector<int> bestDistOfFirst(static_cast<size_t>(nFirst), std::numeric_limits<int>::max());
   std::vector<int> bestFirstOfCur(static_cast<size_t>(nCur), -1);
   std::vector<int> bestDistOfCur(static_cast<size_t>(nCur)), secondDistOfCur(static_cast<size_t>(nCur));
-  for (int i = 0; i < nCur; ++i) {
-    const uint64_t *di = descriptors.ptr<uint64_t>(i);
-    int best = std::numeric_limits<int>::max(), second = best, bestJ = -1;
-    for (int j = 0; j < nFirst; ++j) {
-      const uint64_t *dj = m_firstDescriptors.ptr<uint64_t>(j);
-      int dist = 0;
-      for (int w = 0; w < kOrbDescriptorWords; ++w) {
-        dist += __builtin_popcountll(di[w] ^ dj[w]);
-      }
-      if (dist < best) {
-        second = best;
-        best = dist;
-        bestJ = j;
-      } else if (dist < second) {
-        second = dist;
-      }
-      if (dist < bestDistOfFirst[static_cast<size_t>(j)]) {
-        bestDistOfFirst[static_cast<size_t>(j)] = dist;
-        bestCurOfFirst[static_cast<size_t>(j)] = i;
-      }
-    }
-    bestFirstOfCur[static_cast<size_t>(i)] = bestJ;
-    bestDistOfCur[static_cast<size_t>(i)] = best;
-    secondDistOfCur[static_cast<size_t>(i)] = second;
-  }
+  bruteForceHamming(descriptors.ptr<uint64_t>(0), nCur, m_firstDescriptors.ptr<uint64_t>(0), nFirst,
+                    bestFirstOfCur.data(), bestDistOfCur.data(), secondDistOfCur.data(), bestCurOfFirst.data(),
+                    bestDistOfFirst.data());
   for (int i = 0; i < nCur; ++i) {
     const int j = bestFirstOfCur[static_cast<size_t>(i)];
     const int best = bestDistOfCur[static_cast<size_t>(i)];

@@ -498,6 +498,16 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     if (abortRmse != nullptr && rmse > kAbortResidualFactor * (*abortRmse)[static_cast<size_t>(lvl)]) {
       return fail(CoarseTrackingStatus::worseThanBound, lvl);
     }
+    {
+      // DSO checks the brightness after every level: a frame that cannot be aligned (covered lens) is matched by
+      // a vanishing gain at the coarsest level already; going on would cost every finer level for nothing.
+      double ajiLevel = 1., bjiLevel = 0.;
+      AffineBrightness::transfer(m_refExposure, m_refAffine, exposure, currentAffine, ajiLevel, bjiLevel);
+      if (!(ajiLevel > 0.) || std::fabs(std::log(ajiLevel)) > kMaxLogGainChange ||
+          std::fabs(bjiLevel) > kMaxOffsetChange) {
+        return fail(CoarseTrackingStatus::implausibleBrightness, lvl);
+      }
+    }
     // DSO: a level that needed a larger cutoff is run once more (the pose is now better, the cutoff resets).
     if (cutoffRepeat > 1.f && !haveRepeated) {
       ++lvl;

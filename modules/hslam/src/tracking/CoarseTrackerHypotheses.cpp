@@ -19,6 +19,13 @@ namespace
 constexpr double kCoarseRotationHypothesisSteps[] = {0.02, 0.04};
 //! Half of the last motion (DSO's "half motion" hypothesis).
 constexpr double kHalfMotion = 0.5;
+/*!
+  Once the first hypothesis has failed and none has succeeded yet, the others are bounded per level by this
+  multiple of the last tracked frame's RMSE (then 1.5x inside track()): without any bound each of the ~57
+  hypotheses would run every level to its iteration limit on a frame that cannot be aligned (covered lens,
+  cut), seconds per frame. Integration addition, not in DSO (which leaves them unbounded).
+*/
+constexpr double kHopelessRmseFactor = 5.;
 } // namespace
 
 bool projectIntoReference(const SE3d &refMhost, const PinholeIntrinsics &K0, int width, int height, float uHost,
@@ -113,6 +120,13 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
     ++tried;
     if (i == 0) {
       firstAttempt = attempt;
+      if (!good) {
+        for (size_t l = 0; l < achieved.size(); ++l) {
+          if (std::isfinite(m_lastRmse[l])) {
+            achieved[l] = kHopelessRmseFactor * m_lastRmse[l];
+          }
+        }
+      }
     }
     // New winner: a success whose finest RMSE beats the best so far (or the first success).
     if (good && std::isfinite(attempt.rmse[0]) && !(attempt.rmse[0] >= achieved[0])) {
@@ -131,8 +145,8 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
       break;
     }
   }
-  m_lastRmse = achieved;
   if (!haveOneGood) {
+    // m_lastRmse keeps the last successful frame's values: the bound of the next frame's hypotheses.
     result = firstAttempt;
     result.hypothesesTried = tried;
     newMref = m_hypotheses[0];
@@ -140,6 +154,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
     return false;
   }
   result.hypothesesTried = tried;
+  m_lastRmse = achieved;
   if (!std::isfinite(m_firstRmse)) {
     m_firstRmse = achieved[0];
   }
