@@ -1,32 +1,62 @@
 //! \example tutorial-hslam-dataset.cpp
-//! Open a dataset, a video, an image folder or a V4L2 camera as a vpHSlamImageSource, read every frame, rectify
-//! it to pinhole and report what was read. The same program will later feed the frames to vpHSlam.
+//! Run H-SLAM on a dataset, a video, an image folder or a V4L2 camera: every frame is read from a
+//! vpHSlamImageSource, given to vpHSlam::track(), and the trajectory (TUM, camera-to-world, every frame with a pose),
+//! the keyframes and run statistics (JSON) are written at the end -- also when tracking was lost midway, when the
+//! source failed, or when the run was interrupted with Ctrl-C.
 //!
-//!   ./tutorial-hslam-dataset --input ../shared/data/euroc_V1_01_easy_first95 --no-display
+//!   ./tutorial-hslam-dataset --input ../shared/data/tsukuba_cg_000-149 --deterministic --no-display
+//!       --trajectory tsukuba.txt --keyframes tsukuba-kf.txt --stats tsukuba.json   (one line)
+//!   ./tutorial-hslam-evaluate --groundtruth ../shared/data/tsukuba_cg_000-149/groundtruth.txt --estimate tsukuba.txt
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
-#include <visp3/core/vpImageTools.h>
+#include <visp3/core/vpMeterPixelConversion.h>
 #include <visp3/core/vpTime.h>
 #include <visp3/gui/vpDisplayX.h>
+#include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
+#include <visp3/hslam/vpHSlamLog.h>
+#include <visp3/hslam/vpHSlamParameters.h>
 #include <visp3/hslam/vpHSlamRectifier.h>
 
 #include <algorithm>
+#include <cmath>
+#include <csignal>
 #include <cstdlib>
+#include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
 #include <sstream>
 #include <string>
+#include <sys/resource.h>
 #include <vector>
 
 namespace
 {
+//! Set by SIGINT; the main loop polls it, stops and writes its files (nothing is written from the handler).
+volatile std::sig_atomic_t g_interrupted = 0;
+
+extern "C" void onInterrupt(int)
+{
+  g_interrupted = 1;
+}
+
 struct Arguments {
   std::string input;
   vpHSlamImageSource::Options options;
+  std::string mode = "vo-strict";
+  bool deterministic = false;
+  double speed = 1.; //!< real-time mode: play the sequence at this multiple of its frame rate (0: no pacing)
+  std::string config;
+  std::string trajectory;
+  std::string keyframes;
+  std::string stats;
+  std::string saveConfig;
+  std::string logLevel = "warning";
   bool display = true;
+  bool quiet = false;
   bool help = false;
 };
 
@@ -34,9 +64,12 @@ void printUsage(const char *program, std::ostream &out)
 {
   out << "Usage: " << program
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
-         "       [--camera FILE] [--max-frames N] [--start-frame N] [--fps HZ] [--no-display] [--help]\n\n"
-         "Reads every frame of PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a\n"
-         "video file or /dev/videoN), rectifies it to pinhole and prints what was read.\n\n"
+         "       [--camera FILE] [--max-frames N] [--start-frame N] [--fps HZ] [--mode vo-strict]\n"
+         "       [--deterministic] [--speed X] [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt]\n"
+         "       [--keyframes OUT.txt] [--stats OUT.json] [--log-level LEVEL] [--quiet] [--no-display] [--help]\n\n"
+         "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
+         "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
+         "the source or Ctrl-C.\n\n"
          "  --input PATH       what to read (required)\n"
          "  --format NAME      input format, detected from PATH's content by default (auto)\n"
          "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
@@ -44,6 +77,22 @@ void printUsage(const char *program, std::ostream &out)
          "  --max-frames N     stop after N frames (0 = all, default)\n"
          "  --start-frame N    skip the first N frames (default 0)\n"
          "  --fps HZ           frame rate of image folders and videos (default 30)\n"
+         "  --mode NAME        vo-strict (window only, DSO-like; the only mode implemented so far)\n"
+         "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
+         "                     mapping in its own thread)\n"
+         "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
+         "                     would (default 1; 0 = as fast as possible). Ignored with --deterministic\n"
+         "  --config FILE      settings (YAML, see vpHSlamParameters); command-line options override it;\n"
+         "                     data/hslam-fast.yaml is a real-time preset (DSO defaults otherwise)\n"
+         "  --save-config FILE write the settings in use (YAML)\n"
+         "  --trajectory FILE  every frame with a pose, TUM format (t tx ty tz qx qy qz qw), camera-to-world;\n"
+         "                     when tracking was lost and a new map segment started, FILE.segN.txt per segment too\n"
+         "  --keyframes FILE   keyframe poses, TUM format\n"
+         "  --stats FILE       run statistics as JSON (frames, tracked_frames, keyframes, tracking_ms_median,\n"
+         "                     tracking_ms_p95, mapping_ms_per_keyframe_median, peak_rss_mb,\n"
+         "                     memory_mb_per_keyframe, wall_s, cpu_s, ...)\n"
+         "  --log-level LEVEL  library messages on stderr: error, warning (default), info, debug\n"
+         "  --quiet            no progress line\n"
          "  --no-display       do not open a window (also when no X display is available)\n"
          "  --help             this text\n";
 }
@@ -105,6 +154,27 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.options.startFrame = parseCount(option, value());
     } else if (option == "--fps") {
       args.options.frameRate = parsePositive(option, value());
+    } else if (option == "--mode") {
+      args.mode = value();
+    } else if (option == "--deterministic") {
+      args.deterministic = true;
+    } else if (option == "--speed") {
+      const std::string text = value();
+      args.speed = text == "0" ? 0. : parsePositive(option, text);
+    } else if (option == "--config") {
+      args.config = value();
+    } else if (option == "--save-config") {
+      args.saveConfig = value();
+    } else if (option == "--trajectory") {
+      args.trajectory = value();
+    } else if (option == "--keyframes") {
+      args.keyframes = value();
+    } else if (option == "--stats") {
+      args.stats = value();
+    } else if (option == "--log-level") {
+      args.logLevel = value();
+    } else if (option == "--quiet") {
+      args.quiet = true;
     } else if (option == "--no-display") {
       args.display = false;
     } else {
@@ -117,23 +187,223 @@ Arguments parseArguments(int argc, const char *const argv[])
   return args;
 }
 
-double median(std::vector<double> values)
+//! Settings: defaults, then --config, then the command line.
+vpHSlamParameters makeParameters(const Arguments &args)
 {
-  if (values.empty()) {
+  vpHSlamParameters params;
+  if (!args.config.empty()) {
+    params.load(args.config);
+  }
+  const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
+  if (mode != vpHSlamParameters::modeVoStrict) {
+    throw vpHSlamException(vpHSlamException::unsupported,
+                           "--mode " + args.mode +
+                               ": not implemented yet; only vo-strict (window-only odometry) is available for now");
+  }
+  params.system.mode = mode;
+  if (args.deterministic) {
+    params.system.deterministic = true;
+  }
+  params.validate();
+  return params;
+}
+
+//! Jet colour map on [0, 1]: near (0) red, far (1) blue.
+vpColor depthColor(double x)
+{
+  x = std::min(1., std::max(0., x));
+  const double r = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 1.)));
+  const double g = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 2.)));
+  const double b = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 3.)));
+  return vpColor(static_cast<unsigned char>(255. * r), static_cast<unsigned char>(255. * g),
+                 static_cast<unsigned char>(255. * b));
+}
+
+//! Rectified image with the active points projected by the current pose, coloured by depth.
+void drawPoints(const vpHSlam &slam, vpImage<unsigned char> &I)
+{
+  const std::vector<vpColVector> points = slam.getActivePoints();
+  const vpHomogeneousMatrix cMw = slam.get_cMw();
+  const vpCameraParameters K = slam.getCameraParameters();
+  std::vector<double> depths;
+  std::vector<vpImagePoint> pixels;
+  for (const vpColVector &wX : points) {
+    const double x = cMw[0][0] * wX[0] + cMw[0][1] * wX[1] + cMw[0][2] * wX[2] + cMw[0][3];
+    const double y = cMw[1][0] * wX[0] + cMw[1][1] * wX[1] + cMw[1][2] * wX[2] + cMw[1][3];
+    const double z = cMw[2][0] * wX[0] + cMw[2][1] * wX[1] + cMw[2][2] * wX[2] + cMw[2][3];
+    if (z <= 0.) {
+      continue;
+    }
+    vpImagePoint ip;
+    vpMeterPixelConversion::convertPoint(K, x / z, y / z, ip);
+    if (ip.get_u() < 0 || ip.get_v() < 0 || ip.get_u() >= I.getWidth() || ip.get_v() >= I.getHeight()) {
+      continue;
+    }
+    pixels.push_back(ip);
+    depths.push_back(z);
+  }
+  if (depths.empty()) {
+    return;
+  }
+  // Colour scale from the 5th to the 95th percentile of the visible depths (robust to a few far points).
+  std::vector<double> sorted = depths;
+  std::sort(sorted.begin(), sorted.end());
+  const double lo = sorted[sorted.size() / 20];
+  const double hi = sorted[sorted.size() - 1 - sorted.size() / 20];
+  const double range = std::max(hi - lo, 1e-9);
+  for (size_t k = 0; k < pixels.size(); ++k) {
+    vpDisplay::displayPoint(I, pixels[k], depthColor((depths[k] - lo) / range), 2);
+  }
+}
+
+std::string jsonNumber(double x)
+{
+  if (!std::isfinite(x)) {
+    return "null";
+  }
+  std::ostringstream s;
+  s << std::setprecision(10) << x;
+  return s.str();
+}
+
+void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std::string &input, double wallS,
+                double cpuS, double videoS, double peakRssMb, bool interrupted, const std::string &error,
+                bool deterministic)
+{
+  std::ofstream out(path.c_str());
+  if (!out) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot write the statistics file '" + path + "'");
+  }
+  const unsigned int held = std::max(1u, s.keyframesHeld);
+  std::string escapedError;
+  for (char c : error) {
+    if (c == '"' || c == '\\') {
+      escapedError += '\\';
+    }
+    escapedError += (c == '\n' ? ' ' : c);
+  }
+  std::string escapedInput;
+  for (char c : input) {
+    if (c == '"' || c == '\\') {
+      escapedInput += '\\';
+    }
+    escapedInput += c;
+  }
+  out << "{\n"
+      << "  \"input\": \"" << escapedInput << "\",\n"
+      << "  \"deterministic\": " << (deterministic ? "true" : "false") << ",\n"
+      << "  \"frames\": " << s.frames << ",\n"
+      << "  \"tracked_frames\": " << s.trackedFrames << ",\n"
+      << "  \"tracked_share\": " << jsonNumber(s.frames ? double(s.trackedFrames) / s.frames : 0.) << ",\n"
+      << "  \"lost_frames\": " << s.lostFrames << ",\n"
+      << "  \"segments\": " << s.segments << ",\n"
+      << "  \"keyframes\": " << s.keyframes << ",\n"
+      << "  \"mapping_skipped_frames\": " << s.mappingSkippedFrames << ",\n"
+      << "  \"tracking_ms_median\": " << jsonNumber(s.trackingMsMedian) << ",\n"
+      << "  \"tracking_ms_p95\": " << jsonNumber(s.trackingMsP95) << ",\n"
+      << "  \"tracking_ms_max\": " << jsonNumber(s.trackingMsMax) << ",\n"
+      << "  \"initialization_ms_median\": " << jsonNumber(s.initializationMsMedian) << ",\n"
+      << "  \"mapping_ms_per_keyframe_median\": " << jsonNumber(s.mappingMsPerKeyframeMedian) << ",\n"
+      << "  \"mapping_ms_per_keyframe_p95\": " << jsonNumber(s.mappingMsPerKeyframeP95) << ",\n"
+      << "  \"mapping_ms_per_frame_median\": " << jsonNumber(s.mappingMsPerFrameMedian) << ",\n"
+      << "  \"active_points\": " << s.activePoints << ",\n"
+      << "  \"peak_rss_mb\": " << jsonNumber(peakRssMb) << ",\n"
+      << "  \"map_memory_mb\": " << jsonNumber(s.mapMemoryMb) << ",\n"
+      << "  \"memory_mb_per_keyframe\": " << jsonNumber(s.mapMemoryMb / held) << ",\n"
+      << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
+      << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"
+      << "  \"video_s\": " << jsonNumber(videoS) << ",\n"
+      << "  \"realtime_factor\": " << jsonNumber(wallS > 0. ? videoS / wallS : 0.) << ",\n"
+      << "  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n"
+      << "  \"error\": " << (error.empty() ? std::string("null") : "\"" + escapedError + "\"") << "\n"
+      << "}\n";
+  out.flush();
+  if (!out) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot write the statistics file '" + path + "'");
+  }
+}
+
+//! Peak resident memory of this process from /proc/self/status (VmHWM), MB; 0 when unavailable.
+double peakRssMb()
+{
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.compare(0, 6, "VmHWM:") == 0) {
+      std::istringstream in(line.substr(6));
+      double kb = 0.;
+      if (in >> kb) {
+        return kb / 1024.;
+      }
+    }
+  }
+  return 0.;
+}
+
+//! CPU time (user + system) used by this process so far, seconds.
+double processCpuSeconds()
+{
+  rusage usage{};
+  if (getrusage(RUSAGE_SELF, &usage) != 0) {
     return 0.;
   }
-  const std::size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(mid), values.end());
-  return values[mid];
+  constexpr double kMicro = 1e-6;
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         kMicro * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+//! Write every requested output; report (do not throw) failures so that each file gets its chance.
+bool writeOutputs(const Arguments &args, const vpHSlam &slam, double wallS, double cpuS, double videoS,
+                  bool interrupted, const std::string &error)
+{
+  bool ok = true;
+  auto attempt = [&](const std::string &what, const std::function<void()> &write) {
+    try {
+      write();
+      std::cout << "wrote " << what << std::endl;
+    } catch (const vpException &e) {
+      std::cerr << "error: " << what << ": " << e.getStringMessage() << std::endl;
+      ok = false;
+    }
+  };
+  const vpHSlam::Statistics stats = slam.getStatistics();
+  if (!args.trajectory.empty()) {
+    attempt(args.trajectory, [&]() { slam.getTrajectory().saveTum(args.trajectory); });
+    if (stats.segments > 1) {
+      for (unsigned int s = 0; s < stats.segments; ++s) {
+        const std::string path = args.trajectory + ".seg" + std::to_string(s) + ".txt";
+        attempt(path, [&]() { slam.getTrajectory(static_cast<int>(s)).saveTum(path); });
+      }
+    }
+  }
+  if (!args.keyframes.empty()) {
+    attempt(args.keyframes, [&]() { slam.getKeyframeTrajectory().saveTum(args.keyframes); });
+  }
+  if (!args.stats.empty()) {
+    attempt(args.stats, [&]() {
+      writeStats(args.stats, stats, args.input, wallS, cpuS, videoS, peakRssMb(), interrupted, error,
+                 slam.getParameters().system.deterministic);
+    });
+  }
+  return ok;
 }
 
 int run(const Arguments &args)
 {
+  vpHSlamLog::setSink(vpHSlamLog::stderrSink());
+  vpHSlamLog::setLevel(vpHSlamLog::levelFromString(args.logLevel));
+  const vpHSlamParameters params = makeParameters(args);
+  if (!args.saveConfig.empty()) {
+    params.save(args.saveConfig);
+  }
+
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(args.input, args.options);
   std::cout << "source: " << source->describe() << std::endl;
-
-  const vpHSlamCamera &camera = source->getCamera();
-  vpHSlamRectifier rectifier(camera);
+  std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
+  vpHSlam slam(*source, params);
+  std::cout << "mode: " << vpHSlamParameters::modeName(params.system.mode)
+            << (params.system.deterministic ? ", deterministic" : ", real time") << "; rectified " << slam.getWidth()
+            << "x" << slam.getHeight() << std::endl;
 
   bool display = args.display;
 #if defined(VISP_HAVE_X11)
@@ -147,57 +417,107 @@ int run(const Arguments &args)
   display = false;
 #endif
 
+  std::signal(SIGINT, onInterrupt);
+  const int frameCount = source->getFrameCount();
   vpImage<unsigned char> I, Irect;
   vpHSlamImageSource::Frame frame;
-  std::vector<double> rectifyMs;
-  unsigned int framesRead = 0;
   double firstTimestamp = 0., lastTimestamp = 0.;
-  while (source->acquire(I, frame)) {
-    const double t0 = vpTime::measureTimeMs();
-    rectifier.rectify(I, Irect);
-    rectifyMs.push_back(vpTime::measureTimeMs() - t0);
-    if (framesRead == 0) {
-      firstTimestamp = frame.timestamp;
-    }
-    lastTimestamp = frame.timestamp;
-    ++framesRead;
+  unsigned int framesRead = 0;
+  std::string error;
+  const double t0 = vpTime::measureTimeMs();
+  const double cpu0 = processCpuSeconds();
+  try {
+    while (!g_interrupted && source->acquire(I, frame)) {
+      if (framesRead == 0) {
+        firstTimestamp = frame.timestamp;
+      }
+      lastTimestamp = frame.timestamp;
+      ++framesRead;
+      if (!params.system.deterministic && args.speed > 0.) {
+        // A recorded sequence played like a live camera: frame i is not available before its time.
+        const double dueMs = t0 + 1000. * (frame.timestamp - firstTimestamp) / args.speed;
+        const double waitMs = dueMs - vpTime::measureTimeMs();
+        if (waitMs > 0.) {
+          vpTime::sleepMs(waitMs);
+        }
+      }
+      const vpHSlam::State state = slam.track(I, frame.timestamp, frame.exposure);
+      if (!args.quiet) {
+        const vpHSlam::Statistics s = slam.getStatistics();
+        std::cerr << "\rframe " << frame.index + 1;
+        if (frameCount > 0) {
+          std::cerr << "/" << frameCount;
+        }
+        std::cerr << "  " << std::setw(12) << std::left << vpHSlam::stateName(state) << std::right << " tracked "
+                  << s.trackedFrames << "  kf " << s.keyframes << "  pts " << s.activePoints << "  trk " << std::fixed
+                  << std::setprecision(1) << s.trackingMsMedian << " ms  map " << s.mappingMsPerKeyframeMedian
+                  << " ms/kf   " << std::flush;
+      }
 #if defined(VISP_HAVE_X11)
-    if (display) {
-      if (framesRead == 1) {
-        window.init(Irect, 0, 0, "H-SLAM dataset: rectified input");
+      if (display) {
+        slam.getRectifiedImage(Irect);
+        if (framesRead == 1) {
+          try {
+            window.init(Irect, 0, 0, "H-SLAM: active points coloured by depth (near red, far blue)");
+          } catch (const vpException &e) {
+            std::cerr << "warning: cannot open a window (" << e.getStringMessage() << "): running without display"
+                      << std::endl;
+            display = false;
+            continue;
+          }
+        }
+        vpDisplay::display(Irect);
+        if (state == vpHSlam::stateTracking) {
+          drawPoints(slam, Irect);
+        }
+        std::ostringstream text;
+        text << "frame " << frame.index << "  " << vpHSlam::stateName(state) << "  (click to stop)";
+        vpDisplay::displayText(Irect, 15, 10, text.str(), vpColor::red);
+        vpDisplay::flush(Irect);
+        if (vpDisplay::getClick(Irect, false)) {
+          break;
+        }
       }
-      vpDisplay::display(Irect);
-      std::ostringstream text;
-      text << "frame " << frame.index << "  t = " << std::fixed << std::setprecision(3) << frame.timestamp
-           << " s  (click to stop)";
-      vpDisplay::displayText(Irect, 15, 10, text.str(), vpColor::red);
-      vpDisplay::flush(Irect);
-      if (vpDisplay::getClick(Irect, false)) {
-        break;
-      }
-    }
 #endif
+    }
+  } catch (const vpException &e) {
+    error = e.getStringMessage();
+  } catch (const std::exception &e) {
+    error = e.what();
+  }
+  slam.synchronize();
+  const double wallS = (vpTime::measureTimeMs() - t0) / 1000.;
+  const double cpuS = processCpuSeconds() - cpu0;
+  if (!args.quiet) {
+    std::cerr << std::endl;
+  }
+  if (g_interrupted) {
+    std::cout << "interrupted: writing what was computed" << std::endl;
+  }
+  if (!error.empty()) {
+    std::cerr << "error after " << framesRead << " frames: " << error << " (writing what was computed)" << std::endl;
   }
 
-  const vpHSlamPhotometricCalibration &photometric = source->getPhotometricCalibration();
-  std::cout << "format: " << vpHSlamImageSource::formatName(source->getFormat()) << "\n"
-            << "frames read: " << framesRead << "\n"
-            << "image size: " << camera.getWidth() << "x" << camera.getHeight() << " (rectified "
-            << rectifier.getWidth() << "x" << rectifier.getHeight() << ")\n"
-            << "frame rate: " << source->getFrameRate() << " Hz";
-  if (framesRead > 1 && lastTimestamp > firstTimestamp) {
-    std::cout << " (measured over the frames read: " << (framesRead - 1) / (lastTimestamp - firstTimestamp) << " Hz)";
+  const vpHSlam::Statistics s = slam.getStatistics();
+  const double videoS = framesRead > 1 ? (lastTimestamp - firstTimestamp) * framesRead / (framesRead - 1) : 0.;
+  std::cout << "frames: " << s.frames << ", tracked: " << s.trackedFrames << " (" << std::fixed << std::setprecision(1)
+            << (s.frames ? 100. * s.trackedFrames / s.frames : 0.) << " %), lost: " << s.lostFrames
+            << ", segments: " << s.segments << ", keyframes: " << s.keyframes << "\n"
+            << "tracking: " << std::setprecision(2) << s.trackingMsMedian << " ms median, " << s.trackingMsP95
+            << " ms p95; mapping: " << s.mappingMsPerKeyframeMedian << " ms per keyframe (median)\n"
+            << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
+            << (wallS > 0. ? videoS / wallS : 0.) << "x real time), CPU " << cpuS << " s; peak memory "
+            << std::setprecision(1) << peakRssMb() << " MB" << std::endl;
+  if (s.segments > 1) {
+    std::cout << "warning: tracking was lost; the trajectory has " << s.segments
+              << " map segments with independent scales (see the .segN.txt files)" << std::endl;
   }
-  std::cout << "\n"
-            << "camera: " << camera.toString() << "\n"
-            << photometric.getStatus() << "\n"
-            << "rectification: " << std::fixed << std::setprecision(3) << median(rectifyMs) << " ms per frame (median)"
-            << std::endl;
-  if (framesRead == 0) {
+  const bool written = writeOutputs(args, slam, wallS, cpuS, videoS, g_interrupted != 0, error);
+  if (framesRead == 0 && error.empty()) {
     std::cerr << "error: no frame could be read from '" << args.input << "'" << std::endl;
     return EXIT_FAILURE;
   }
-  return EXIT_SUCCESS;
+  return (error.empty() && written) ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 } // namespace
 

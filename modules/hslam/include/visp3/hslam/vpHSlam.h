@@ -1,0 +1,211 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file vpHSlam.h
+  \brief The monocular SLAM system: feed it images, read poses, keyframes, points, trajectory and statistics.
+*/
+#ifndef VP_HSLAM_H
+#define VP_HSLAM_H
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpColVector.h>
+#include <visp3/core/vpConfig.h>
+#include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpImage.h>
+#include <visp3/hslam/vpHSlamCamera.h>
+#include <visp3/hslam/vpHSlamImageSource.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+#include <visp3/hslam/vpHSlamPhotometricCalibration.h>
+#include <visp3/hslam/vpHSlamTrajectory.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace hslam
+{
+class SlamSystem;
+} // namespace hslam
+
+/*!
+  \class vpHSlam
+  \ingroup group_hslam
+  \brief H-SLAM, the monocular visual SLAM system: one grey image in, one camera pose out.
+
+  What it is for: this is the object a program talks to. Built from the camera calibration (or directly from a
+  vpHSlamImageSource), it rectifies each image to pinhole, applies the photometric calibration when there is one,
+  tracks the camera against a sliding window of keyframes by direct image alignment (DSO, Engel et al. 2018) and
+  maintains that window by photometric bundle adjustment. The first frames are used to initialise the map from
+  two views (feature matches, essential matrix or homography); track() reports stateInitializing until then.
+
+  Execution modes (vpHSlamParameters::System::deterministic):
+  - deterministic: mapping runs inside track(), in the caller's thread, after tracking. A run on the same images
+    gives bit-identical poses every time; benchmarks and tests use it.
+  - real time (default): mapping runs in its own thread, fed by a queue. track() never waits for mapping; when
+    mapping falls behind, frames are skipped FOR MAPPING (they are still tracked and still have a pose) and the
+    newest frame is used for the next keyframe. synchronize() waits until mapping has consumed the queue.
+
+  Lost tracking: a frame whose direct alignment fails keeps the pose predicted by the motion model (as in DSO) but
+  neither feeds mapping nor becomes a keyframe; after vpHSlamParameters::System::maxTrackingFailures such frames
+  in a row (or a non-finite estimate), track() returns stateLost for that frame, which gets no pose. The next frames
+  initialise a NEW map segment: its world frame is chained to the last tracked pose so the trajectory stays
+  continuous (its scale is arbitrary, as for any monocular map), and the old segment's keyframes and trajectory
+  are kept. Keyframe::segment and getTrajectory(segment) tell the segments apart. A segment whose first keyframes
+  reveal a wrong initialisation (window residual too high, DSO's check) is discarded and initialised again.
+
+  Initialisation: frames seen before the map exists are kept (raw) and, once it exists, tracked backwards from the
+  second keyframe, so the trajectory starts at the first frames rather than where initialisation succeeded. Nothing in this class exits or
+  crashes on bad input: wrong image sizes, empty images and misuse raise vpHSlamException.
+
+  Trajectory: every frame with a pose is stored RELATIVE to its reference keyframe, so when the window
+  optimisation moves a keyframe, getTrajectory() moves the frames tracked against it too.
+
+  Threading and ownership: track(), reset() and the constructor/destructor must be called from one thread (the
+  "tracking" thread). The getters (get_cMw(), getKeyframes(), getActivePoints(), getTrajectory(), getStatistics())
+  are thread-safe snapshots and may be called from any thread, e.g. a viewer. The object owns its mapping thread;
+  the destructor stops it once the frames still queued for mapping (a few at most) are processed.
+
+  Settings: vpHSlamParameters defaults are DSO's. data/hslam-fast.yaml is a real-time preset (fewer points and
+  keyframes, a 6-keyframe window) that runs the shared 640x480 sequences at 2.9x to 6x real time on one core.
+
+  \code
+  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create("../shared/data/tsukuba_cg_000-149");
+  vpHSlamParameters params;
+  params.system.deterministic = true;
+  vpHSlam slam(*source, params);
+  vpImage<unsigned char> I;
+  vpHSlamImageSource::Frame frame;
+  while (source->acquire(I, frame)) {
+    if (slam.track(I, frame.timestamp, frame.exposure) == vpHSlam::stateTracking) {
+      vpHomogeneousMatrix cMw = slam.get_cMw();
+    }
+  }
+  slam.getTrajectory().saveTum("trajectory.txt");
+  \endcode
+*/
+class VISP_EXPORT vpHSlam
+{
+public:
+  //! What track() achieved for the frame it was given.
+  enum State {
+    stateInitializing, //!< no map yet (or a new segment after a loss): the frame has no pose
+    stateTracking,     //!< the frame was tracked and has a pose
+    stateLost          //!< tracking failed for this frame: no pose; the next frames start a new segment
+  };
+
+  //! A keyframe as seen from outside (a copy).
+  struct Keyframe {
+    unsigned int id = 0;           //!< keyframe index, 0-based, over the whole run
+    unsigned int frameIndex = 0;   //!< index of the frame among those given to track()
+    double timestamp = 0.;         //!< seconds
+    vpHomogeneousMatrix wMc;       //!< camera-to-world pose
+    bool inWindow = false;         //!< still in the optimisation window (false once marginalised)
+    unsigned int segment = 0;      //!< map segment (a new one starts after each loss of tracking)
+    unsigned int activePoints = 0; //!< points it hosts that are active in the window
+  };
+
+  //! Counters and timings of the run so far.
+  struct Statistics {
+    unsigned int frames = 0;                //!< frames given to track()
+    unsigned int trackedFrames = 0;         //!< frames with a pose
+    unsigned int keyframes = 0;             //!< keyframes created
+    unsigned int segments = 0;              //!< map segments (1 + losses that were followed by a new map)
+    unsigned int lostFrames = 0;            //!< frames for which track() returned stateLost
+    unsigned int mappingSkippedFrames = 0;  //!< frames tracked but not given to mapping (real-time mode only)
+    unsigned int activePoints = 0;          //!< active points in the window now
+    unsigned int immaturePoints = 0;        //!< candidate points being traced now
+    double trackingMsMedian = 0.;           //!< per frame: preprocessing + tracking + keyframe decision, milliseconds
+    double trackingMsP95 = 0.;              //!< 95th percentile of the same, milliseconds
+    double trackingMsMax = 0.;              //!< largest, milliseconds
+    double initializationMsMedian = 0.;     //!< per frame while initialising, milliseconds
+    double mappingMsPerKeyframeMedian = 0.; //!< keyframe creation, optimisation and marginalisation, milliseconds
+    double mappingMsPerKeyframeP95 = 0.;    //!< 95th percentile of the same, milliseconds
+    double mappingMsPerFrameMedian = 0.;    //!< non-keyframes (epipolar tracing only), milliseconds
+    double mapMemoryMb = 0.;                //!< estimated memory held by keyframes (images, points), MB
+    double mapMemoryMbPerKeyframe = 0.;     //!< mapMemoryMb divided by the keyframes held, MB
+    unsigned int keyframesHeld = 0;         //!< keyframes whose data is held (window + kept marginalised ones)
+  };
+
+  /*!
+    Build the system for a camera.
+    \param camera : geometric calibration of the images that will be given to track() (raw, distorted).
+    \param parameters : every setting (copied; validated).
+    \param photometric : photometric calibration of the raw images (empty: affine brightness is estimated).
+    \exception vpHSlamException::invalidArgument when a parameter is out of range, or the rectification fails.
+  */
+  explicit vpHSlam(const vpHSlamCamera &camera, const vpHSlamParameters &parameters = vpHSlamParameters(),
+                   const vpHSlamPhotometricCalibration &photometric = vpHSlamPhotometricCalibration());
+  /*!
+    Build the system for an image source: its camera and photometric calibration are used (the latter unless
+    vpHSlamParameters::System::usePhotometricCalibration is false).
+  */
+  explicit vpHSlam(const vpHSlamImageSource &source, const vpHSlamParameters &parameters = vpHSlamParameters());
+  ~vpHSlam();
+  vpHSlam(const vpHSlam &) = delete;
+  vpHSlam &operator=(const vpHSlam &) = delete;
+
+  /*!
+    Process one image.
+    \param I : grey image of the camera's input size (vpHSlamCamera::getWidth() x getHeight()).
+    \param timestamp : seconds, strictly increasing.
+    \param exposure : exposure time (milliseconds, any consistent unit), <= 0 when unknown.
+    \return the state for this frame.
+    \exception vpHSlamException::invalidImage when I is empty or of the wrong size (both sizes are named);
+    vpHSlamException::invalidTimestamps when the timestamp does not increase.
+  */
+  State track(const vpImage<unsigned char> &I, double timestamp, double exposure = -1.);
+
+  //! State returned by the last track() (stateInitializing before the first).
+  State getState() const;
+  //! World-to-camera pose of the last frame that has a pose (identity before the first).
+  vpHomogeneousMatrix get_cMw() const;
+  //! True once at least one frame has a pose.
+  bool hasPose() const;
+
+  //! Every keyframe created so far (all segments), ordered by id, poses as currently estimated.
+  std::vector<Keyframe> getKeyframes() const;
+  /*!
+    3D positions in the world frame (metres up to the monocular scale, 3-vectors) of the points active in the
+    window, with their depth in the newest keyframe's camera (same order) when \e depths is not null.
+  */
+  std::vector<vpColVector> getActivePoints(std::vector<double> *depths = nullptr) const;
+
+  /*!
+    Trajectory of every frame that has a pose (camera-to-world), each frame expressed relative to its reference
+    keyframe and composed with that keyframe's current pose.
+    \param segment : only this map segment; -1 (default) for all segments in order.
+  */
+  vpHSlamTrajectory getTrajectory(int segment = -1) const;
+  //! Keyframe poses only (camera-to-world), all segments or one.
+  vpHSlamTrajectory getKeyframeTrajectory(int segment = -1) const;
+  //! Segment of every pose of getTrajectory() (same order), for programs that write them apart.
+  std::vector<unsigned int> getTrajectorySegments() const;
+
+  //! Counters and timings so far.
+  Statistics getStatistics() const;
+
+  //! Real-time mode: block until mapping has processed every queued frame. Deterministic mode: no effect.
+  void synchronize();
+
+  //! Forget everything (map, trajectory, statistics) and start again with the next frame.
+  void reset();
+
+  //! The pinhole camera of the rectified images the system works in.
+  vpCameraParameters getCameraParameters() const;
+  //! Rectified image width, pixels.
+  unsigned int getWidth() const;
+  //! Rectified image height, pixels.
+  unsigned int getHeight() const;
+  //! The last image given to track(), rectified (8-bit, photometrically raw), for display.
+  void getRectifiedImage(vpImage<unsigned char> &I) const;
+  //! The settings in use.
+  const vpHSlamParameters &getParameters() const;
+  //! "initializing", "tracking" or "lost".
+  static std::string stateName(State state);
+
+private:
+  std::unique_ptr<hslam::SlamSystem> m_system;
+};
+
+#endif

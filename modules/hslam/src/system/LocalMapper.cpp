@@ -1,0 +1,477 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "system/LocalMapper.h"
+
+#include "features/PixelSelector.h"
+#include "mapping/ImmaturePointTracer.h"
+#include "mapping/PointActivation.h"
+#include "mapping/SparseIdepthInterpolator.h"
+#include "mapping/TwoViewInitializer.h"
+#include "mapping/WindowOptimizer.h"
+#include "system/RunStatistics.h"
+#include "tracking/CoarseTracker.h"
+
+#include <visp3/hslam/vpHSlamLog.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+//! DSO optimizeImmaturePoint: Gauss-Newton iterations on a point's inverse depth at activation.
+constexpr int kActivationIterations = 3;
+//! DSO makeCoarseDepthL0: a point's weight in the tracking reference is sqrt(1e-3 * H_idepth).
+constexpr double kTrackingWeightScale = 1e-3;
+//! Floor on a point's inverse-depth variance when turned into a tracking weight (a zero variance = unknown).
+constexpr double kMinIdepthVariance = 1e-12;
+//! DSO makeKeyFrame: window RMSE above which keyframes 2, 3, 4 reveal a failed initialisation.
+constexpr double kInitRmseLimits[] = {20., 13., 9.};
+constexpr int kFirstCheckedKeyframe = 2;
+//! Initial points: the interpolated inverse depth is searched over +-this many standard deviations in frame 2.
+constexpr double kInitialIntervalSigmas = 2.;
+//! ... and at least over +-this fraction of it (interpolation between sparse corners is rough).
+constexpr double kInitialIntervalMinRelative = 0.5;
+//! Initial points whose interval runs out of the second image: narrowed by this factor, at most this many tries.
+constexpr double kInitialIntervalShrink = 0.5;
+constexpr int kInitialIntervalAttempts = 3;
+//! Interpolation of the two-view points: neighbours used and relative sigma floor (SparseIdepthInterpolator).
+constexpr int kInitialNeighbours = 8;
+constexpr double kInitialMinRelativeSigma = 0.1;
+//! Fewer initial points than this: the initialisation is refused (the tracker needs texture to hold on to).
+constexpr int kMinInitialPoints = 100;
+//! Seed of a keyframe's pixel selection: its frame id plus this fixed offset (any constant: runs stay reproducible).
+constexpr unsigned int kSelectionSeedOffset = 7919u;
+} // namespace
+
+struct LocalMapper::Impl {
+  Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated)
+      : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper), selector(p.features),
+        optimizer(p)
+  {
+    optimizer.setPhotometricallyCalibrated(calibrated);
+  }
+
+  vpHSlamParameters params;
+  PinholeIntrinsics K0;
+  int width, height;
+  ImmaturePointTracer tracer;
+  PointActivation activation;
+  PixelSelector selector;
+  WindowOptimizer optimizer;
+  std::vector<SelectedPixel> selected;             //!< scratch of the pixel selection
+  std::vector<CoarseTrackerPoint> referencePoints; //!< tracking reference of the newest keyframe
+  int referenceKeyframe = -1;
+  std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
+  int keyframesInSegment = 0;
+};
+
+LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
+                         bool photometricCalibration)
+    : m_impl(new Impl(params, K0, width, height, photometricCalibration)),
+      m_photometricCalibration(photometricCalibration)
+{
+}
+
+LocalMapper::~LocalMapper() = default;
+
+void LocalMapper::clear()
+{
+  // A fresh optimiser and activation state: a new segment shares nothing with the old one.
+  std::unique_ptr<Impl> fresh(
+      new Impl(m_impl->params, m_impl->K0, m_impl->width, m_impl->height, m_photometricCalibration));
+  m_impl.swap(fresh);
+  m_window.clear();
+  m_initializationFailed = false;
+}
+
+// ------------------------------------------------------------------------------------------------ initialisation
+
+bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const FramePtr &second, int secondKeyframeId,
+                             const TwoViewInitialization &init, const SE3d &wMfirst)
+{
+  Impl &m = *m_impl;
+  if (init.points.empty()) {
+    return false;
+  }
+  first->cMw = wMfirst.inverse();
+  first->affine = AffineBrightness();
+  first->keyframeId = firstKeyframeId;
+  second->cMw = init.c2Mc1 * first->cMw;
+  second->affine = AffineBrightness();
+
+  // Inverse-depth prior for any pixel of the first frame from the triangulated matches.
+  std::vector<IdepthSample> samples;
+  samples.reserve(init.points.size());
+  for (const InitialPoint &p : init.points) {
+    samples.push_back({p.u, p.v, p.idepth});
+  }
+  const SparseIdepthInterpolator interpolator(samples, m.width, m.height, kInitialNeighbours, kInitialMinRelativeSigma);
+
+  KeyframePtr kf0 = std::make_shared<Keyframe>();
+  kf0->frame = first;
+  m.selector.select(first->pyramid, m.params.features.desiredPointDensity,
+                    static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected);
+  // Each selected pixel is searched along its epipolar segment in the second frame around its prior (the tracer
+  // does DSO's discrete search + Gauss-Newton), then refined by the window's point optimiser below.
+  const SE3d secondMfirst = init.c2Mc1;
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(first->exposure, first->affine, second->exposure, second->affine, aji, bji);
+  const TraceContext context = m.tracer.makeContext(*first, *second, secondMfirst, aji, bji, m.K0);
+  std::vector<ImmaturePoint> candidates;
+  candidates.reserve(m.selected.size());
+  TraceStatistics traceStats;
+  for (const SelectedPixel &px : m.selected) {
+    ImmaturePoint pt;
+    if (!m.tracer.createImmaturePoint(*first, static_cast<float>(px.u), static_cast<float>(px.v), px.level, pt)) {
+      continue;
+    }
+    const IdepthPrior prior = interpolator.query(px.u, px.v);
+    double halfWidth =
+        std::max(kInitialIntervalSigmas * std::sqrt(prior.idepthVar), kInitialIntervalMinRelative * prior.idepth);
+    // The tracer refuses an interval whose near end leaves the second image (DSO: out of bounds); under forward
+    // motion that is often only the wide prior's end, so the interval is narrowed around the prior and retried.
+    for (int attempt = 0; attempt < kInitialIntervalAttempts; ++attempt, halfWidth *= kInitialIntervalShrink) {
+      pt.idepthMin = static_cast<float>(std::max(0., prior.idepth - halfWidth));
+      pt.idepthMax = static_cast<float>(prior.idepth + halfWidth);
+      pt.lastStatus = TraceStatus::uninitialized;
+      if (m.tracer.trace(pt, context) != TraceStatus::outOfBounds) {
+        break;
+      }
+    }
+    traceStats.add(pt.lastStatus);
+    if (pt.lastStatus != TraceStatus::good && pt.lastStatus != TraceStatus::skipped &&
+        pt.lastStatus != TraceStatus::badCondition) {
+      continue;
+    }
+    candidates.push_back(pt);
+  }
+
+  m.optimizer.addKeyframe(kf0);
+  KeyframePtr kf1 = std::make_shared<Keyframe>();
+  second->keyframeId = secondKeyframeId;
+  kf1->frame = second;
+  m.optimizer.addKeyframe(kf1);
+  for (const ImmaturePoint &pt : candidates) {
+    const double idepth = PointActivation::initialIdepth(pt);
+    const PointActivationResult r = m.optimizer.optimizeNewPoint(firstKeyframeId, pt.u, pt.v, idepth, pt.patch,
+                                                                 pt.patchWeight, kActivationIterations);
+    if (!r.accepted) {
+      continue;
+    }
+    MapPoint mp = PointActivation::makeMapPoint(pt);
+    mp.idepth = r.idepth;
+    mp.idepthVar = 1. / r.idepthHessian;
+    kf0->points.push_back(mp);
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug,
+               "initialisation: " << m.selected.size() << " pixels selected, " << candidates.size() << " traced (good "
+                                  << traceStats.good << ", skipped " << traceStats.skipped << ", bad condition "
+                                  << traceStats.badCondition << ", outlier " << traceStats.outlier << ", out of bounds "
+                                  << traceStats.outOfBounds << "), " << kf0->points.size() << " activated");
+  if (static_cast<int>(kf0->points.size()) < kMinInitialPoints) {
+    clear();
+    return false;
+  }
+  m_window.push_back(kf0);
+  m_window.push_back(kf1);
+  m.keyframesInSegment = 2;
+  // The second keyframe goes through the ordinary keyframe path from "optimise" on (nothing to trace yet).
+  finishKeyframe(kf1);
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------------ per frame
+
+void LocalMapper::traceAll(const Frame &frame)
+{
+  for (const KeyframePtr &kf : m_window) {
+    if (!kf->immature.empty()) {
+      m_impl->tracer.traceAll(kf->immature, *kf->frame, frame);
+    }
+  }
+}
+
+void LocalMapper::makeNonKeyframe(const FramePtr &frame)
+{
+  traceAll(*frame);
+}
+
+void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
+{
+  Impl &m = *m_impl;
+  const double t0 = threadCpuMs();
+  traceAll(*frame);
+  const double t1 = threadCpuMs();
+  frame->keyframeId = keyframeId;
+  KeyframePtr kf = std::make_shared<Keyframe>();
+  kf->frame = frame;
+  m.optimizer.addKeyframe(kf);
+  m_window.push_back(kf);
+  ++m.keyframesInSegment;
+  activatePoints(*kf);
+  const double t2 = threadCpuMs();
+  finishKeyframe(kf);
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << keyframeId << " timing: trace " << t1 - t0 << " ms, activation "
+                                              << t2 - t1 << " ms, rest " << threadCpuMs() - t2 << " ms");
+}
+
+void LocalMapper::activatePoints(const Keyframe &newest)
+{
+  Impl &m = *m_impl;
+  // DSO activatePointsMT: adapt the minimum distance to the active count, distance map over the newest keyframe.
+  m.activation.adaptMinDistance(activePointCount(), m.params.features.desiredPointDensity);
+  m.activation.buildDistanceMap(m_window, newest);
+  const ActivationPlan plan = m.activation.selectPoints(m_window, newest);
+  std::vector<ImmaturePointRef> erase = plan.drop;
+  erase.reserve(plan.drop.size() + plan.activate.size());
+  for (const ActivationCandidate &c : plan.activate) {
+    Keyframe &host = *m_window[static_cast<size_t>(c.ref.windowIndex)];
+    const ImmaturePoint &pt = host.immature[static_cast<size_t>(c.ref.pointIndex)];
+    const PointActivationResult r =
+        m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, c.idepth, pt.patch, pt.patchWeight, kActivationIterations);
+    if (r.accepted) {
+      MapPoint mp = PointActivation::makeMapPoint(pt);
+      mp.idepth = r.idepth;
+      mp.idepthVar = 1. / r.idepthHessian;
+      host.points.push_back(mp);
+      erase.push_back(c.ref);
+    } else if (r.inlierResiduals == 0) {
+      erase.push_back(c.ref); // DSO: no good residual at all, the candidate is hopeless
+    }
+  }
+  PointActivation::eraseImmaturePoints(m_window, erase);
+}
+
+void LocalMapper::finishKeyframe(const KeyframePtr &kf)
+{
+  Impl &m = *m_impl;
+  const double t0 = threadCpuMs();
+  const std::vector<int> toMarginalize = m.optimizer.keyframesToMarginalize();
+  const OptimizationSummary summary = m.optimizer.optimize(m.params.mapper.maxOptimizationIterations);
+  const double rmse =
+      summary.inlierResiduals > 0
+          ? std::sqrt(summary.finalEnergy / (static_cast<double>(summary.inlierResiduals) * kPatternSize))
+          : 0.;
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << kf->id() << ": " << summary.activePoints << " points, "
+                                              << summary.iterations << " LM iterations, rmse " << rmse << ", "
+                                              << summary.outlierPoints << " outlier points, " << summary.totalMs
+                                              << " ms");
+  // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong.
+  const int checked = m.keyframesInSegment - kFirstCheckedKeyframe;
+  if (checked >= 0 && checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&
+      rmse > kInitRmseLimits[checked]) {
+    m_initializationFailed = true;
+  }
+  const double t1 = threadCpuMs();
+  buildReferencePoints();
+  dropPointsOutOfView(*kf);
+  makeNewImmaturePoints(*kf);
+  const double t2 = threadCpuMs();
+  for (int id : toMarginalize) {
+    marginalize(id);
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << kf->id() << " timing: optimisation " << t1 - t0
+                                              << " ms, reference + selection " << t2 - t1 << " ms, marginalisation "
+                                              << threadCpuMs() - t2 << " ms");
+}
+
+void LocalMapper::buildReferencePoints()
+{
+  Impl &m = *m_impl;
+  m.referencePoints.clear();
+  if (m_window.empty()) {
+    m.referenceKeyframe = -1;
+    return;
+  }
+  const Keyframe &newest = *m_window.back();
+  m.referenceKeyframe = newest.id();
+  for (const KeyframePtr &host : m_window) {
+    const SE3d refMhost = newest.frame->cMw * host->frame->cMw.inverse();
+    for (const MapPoint &p : host->points) {
+      if (p.status != PointStatus::active || !(p.idepth > 0.)) {
+        continue;
+      }
+      const double weight = std::sqrt(kTrackingWeightScale / std::max(p.idepthVar, kMinIdepthVariance));
+      CoarseTrackerPoint out;
+      if (projectIntoReference(refMhost, m.K0, m.width, m.height, p.u, p.v, static_cast<float>(p.idepth),
+                               static_cast<float>(weight), out)) {
+        m.referencePoints.push_back(out);
+      }
+    }
+  }
+}
+
+void LocalMapper::dropPointsOutOfView(const Keyframe &newest)
+{
+  // DSO flagPointsForRemoval: a point that no longer projects into the newest keyframe will not be seen again by
+  // the window; it leaves the optimisation (its status change releases it from the optimiser).
+  const PyramidLevel &level0 = newest.frame->pyramid.level(0);
+  for (const KeyframePtr &host : m_window) {
+    if (host.get() == &newest) {
+      continue;
+    }
+    const SE3d newMhost = newest.frame->cMw * host->frame->cMw.inverse();
+    const Eigen::Matrix3d R = newMhost.rotationMatrix();
+    const Eigen::Vector3d t = newMhost.translation();
+    for (MapPoint &p : host->points) {
+      if (p.status != PointStatus::active) {
+        continue;
+      }
+      if (!(p.idepth > 0.)) {
+        p.status = PointStatus::outlier;
+        continue;
+      }
+      const Eigen::Vector3d ray((p.u - m_impl->K0.cx) / m_impl->K0.fx, (p.v - m_impl->K0.cy) / m_impl->K0.fy, 1.);
+      const Eigen::Vector3d q = R * ray + t * p.idepth;
+      if (!(q.z() > 0.)) {
+        p.status = PointStatus::marginalized;
+        continue;
+      }
+      const double u = m_impl->K0.fx * q.x() / q.z() + m_impl->K0.cx;
+      const double v = m_impl->K0.fy * q.y() / q.z() + m_impl->K0.cy;
+      if (!level0.isInside(static_cast<float>(u), static_cast<float>(v), static_cast<float>(kPatternPadding))) {
+        p.status = PointStatus::marginalized;
+      }
+    }
+  }
+}
+
+void LocalMapper::makeNewImmaturePoints(Keyframe &kf)
+{
+  Impl &m = *m_impl;
+  m.selector.select(kf.frame->pyramid, m.params.features.desiredImmatureDensity,
+                    static_cast<unsigned int>(kf.frame->id) + kSelectionSeedOffset, m.selected);
+  kf.immature.reserve(kf.immature.size() + m.selected.size());
+  ImmaturePoint pt;
+  for (const SelectedPixel &px : m.selected) {
+    if (m.tracer.createImmaturePoint(*kf.frame, static_cast<float>(px.u), static_cast<float>(px.v), px.level, pt)) {
+      kf.immature.push_back(pt);
+    }
+  }
+}
+
+void LocalMapper::marginalize(int keyframeId)
+{
+  Impl &m = *m_impl;
+  auto it = std::find_if(m_window.begin(), m_window.end(),
+                         [keyframeId](const KeyframePtr &kf) { return kf->id() == keyframeId; });
+  if (it == m_window.end()) {
+    return;
+  }
+  m.optimizer.marginalizeKeyframe(keyframeId);
+  KeyframeState state;
+  state.id = keyframeId;
+  state.wMc = (*it)->frame->cMw.inverse();
+  state.inWindow = false;
+  state.activePoints = 0;
+  m.marginalizedStates.push_back(state);
+  m_window.erase(it);
+}
+
+// ------------------------------------------------------------------------------------------------ outputs
+
+bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
+                                           double &exposure) const
+{
+  const Impl &m = *m_impl;
+  if (m_window.empty() || m.referenceKeyframe < 0) {
+    return false;
+  }
+  KeyframePtr ref;
+  for (const KeyframePtr &kf : m_window) {
+    if (kf->id() == m.referenceKeyframe) {
+      ref = kf;
+    }
+  }
+  if (!ref) {
+    return false;
+  }
+  tracker.setReference(*ref->frame, m.referencePoints);
+  keyframeId = ref->id();
+  affine = ref->frame->affine;
+  exposure = ref->frame->exposure;
+  return true;
+}
+
+void LocalMapper::takeKeyframeStates(std::vector<KeyframeState> &states)
+{
+  states = m_impl->marginalizedStates;
+  m_impl->marginalizedStates.clear();
+  for (const KeyframePtr &kf : m_window) {
+    KeyframeState s;
+    s.id = kf->id();
+    s.wMc = kf->frame->cMw.inverse();
+    s.inWindow = true;
+    for (const MapPoint &p : kf->points) {
+      s.activePoints += p.status == PointStatus::active ? 1u : 0u;
+    }
+    states.push_back(s);
+  }
+}
+
+void LocalMapper::activePointsWorld(std::vector<Eigen::Vector3d> &points) const
+{
+  points.clear();
+  const PinholeIntrinsics &K = m_impl->K0;
+  for (const KeyframePtr &kf : m_window) {
+    const SE3d wMc = kf->frame->cMw.inverse();
+    for (const MapPoint &p : kf->points) {
+      if (p.status != PointStatus::active || !(p.idepth > 0.)) {
+        continue;
+      }
+      const Eigen::Vector3d cX((p.u - K.cx) / K.fx / p.idepth, (p.v - K.cy) / K.fy / p.idepth, 1. / p.idepth);
+      points.push_back(wMc * cX);
+    }
+  }
+}
+
+int LocalMapper::activePointCount() const
+{
+  int n = 0;
+  for (const KeyframePtr &kf : m_window) {
+    for (const MapPoint &p : kf->points) {
+      n += p.status == PointStatus::active ? 1 : 0;
+    }
+  }
+  return n;
+}
+
+int LocalMapper::immaturePointCount() const
+{
+  int n = 0;
+  for (const KeyframePtr &kf : m_window) {
+    n += static_cast<int>(kf->immature.size());
+  }
+  return n;
+}
+
+double LocalMapper::memoryBytes() const
+{
+  double bytes = 0.;
+  for (const KeyframePtr &kf : m_window) {
+    const ImagePyramid &pyr = kf->frame->pyramid;
+    for (int l = 0; l < pyr.numLevels(); ++l) {
+      const PyramidLevel &level = pyr.level(l);
+      bytes += static_cast<double>(level.color.capacity() * sizeof(Eigen::Vector3f) +
+                                   level.gradSq.capacity() * sizeof(float));
+    }
+    bytes += static_cast<double>(kf->frame->raw.getSize());
+    bytes +=
+        static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
+  }
+  return bytes;
+}
+
+SE3d LocalMapper::newestKeyframe_cMw() const
+{
+  return m_window.empty() ? SE3d() : m_window.back()->frame->cMw;
+}
+
+int LocalMapper::newestKeyframeId() const
+{
+  return m_window.empty() ? -1 : m_window.back()->id();
+}
+} // namespace hslam

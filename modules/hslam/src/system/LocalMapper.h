@@ -1,0 +1,119 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file LocalMapper.h
+  \brief The mapping back end of the direct core: keyframe window, immature points, activation, window
+  optimisation, outlier removal, marginalisation (DSO FullSystem::makeKeyFrame / makeNonKeyFrame).
+
+  makeKeyframe() follows DSO's order: trace the window's immature points in the new frame, flag keyframes for
+  marginalisation, insert the keyframe, activate points (distance map), optimise the window, remove outliers,
+  marginalise points that leave the window, select new immature points in the new keyframe, marginalise the
+  flagged keyframes. makeNonKeyframe() only traces.
+
+  Initialisation (instead of DSO's coarse initializer): the two-view result gives the first keyframe sparse
+  triangulated points; gradient pixels selected in it get an inverse depth interpolated from them
+  (SparseIdepthInterpolator) and become active points; the frame that initialised becomes the second keyframe
+  through makeKeyframe(), whose window optimisation refines everything photometrically.
+
+  Threading: not thread-safe. Owned by SlamSystem and used by one thread at a time (the mapping thread, or the
+  caller in deterministic mode, under SlamSystem's mapper mutex). Frames given to it are then owned by it; their
+  poses (cMw) and brightness are written here.
+*/
+#ifndef HSLAM_SYSTEM_LOCAL_MAPPER_H
+#define HSLAM_SYSTEM_LOCAL_MAPPER_H
+
+#include "features/ImagePyramid.h"
+#include "map/Frame.h"
+#include "map/Keyframe.h"
+#include "math/SE3.h"
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+
+#include <memory>
+#include <vector>
+
+namespace hslam
+{
+class CoarseTracker;
+struct TwoViewInitialization;
+
+class VISP_EXPORT LocalMapper
+{
+public:
+  //! What the back end reports about a keyframe it holds (or just let go).
+  struct KeyframeState {
+    int id = -1;
+    SE3d wMc;
+    bool inWindow = true;
+    unsigned int activePoints = 0;
+  };
+
+  LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
+              bool photometricCalibration);
+  ~LocalMapper();
+
+  /*!
+    Start a map from a two-view initialisation.
+    \param first : the first frame (host of the initial points); its pose becomes \e wMfirst.
+    \param second : the frame that initialised; its pose is wMfirst * (init.c2Mc1)^-1.
+    \return false when too few points could be made (the caller keeps initialising).
+  */
+  bool initialize(const FramePtr &first, int firstKeyframeId, const FramePtr &second, int secondKeyframeId,
+                  const TwoViewInitialization &init, const SE3d &wMfirst);
+
+  //! Make \e frame (pose cMw already set from its tracking reference) the newest keyframe.
+  void makeKeyframe(const FramePtr &frame, int keyframeId);
+  //! Trace the immature points of the window in \e frame (pose already set).
+  void makeNonKeyframe(const FramePtr &frame);
+
+  /*!
+    Set \e tracker's reference to the newest keyframe with every active point of the window expressed in it.
+    \return false when the window is empty.
+  */
+  bool prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
+                                double &exposure) const;
+
+  //! States of the window's keyframes and of those marginalised since the last call (then forgotten).
+  void takeKeyframeStates(std::vector<KeyframeState> &states);
+  //! World positions of the active points.
+  void activePointsWorld(std::vector<Eigen::Vector3d> &points) const;
+
+  int activePointCount() const;
+  int immaturePointCount() const;
+  //! Bytes held by the window's keyframes (pyramids, images, points).
+  double memoryBytes() const;
+  int keyframesHeld() const { return static_cast<int>(m_window.size()); }
+  //! Pose of the newest keyframe (world-to-camera); identity when none.
+  SE3d newestKeyframe_cMw() const;
+  int newestKeyframeId() const;
+
+  /*!
+    True when the last window optimisation of one of the first keyframes had an RMSE too high for a correct
+    initialisation (DSO's check on keyframes 2 to 4): the caller should start again.
+  */
+  bool initializationFailed() const { return m_initializationFailed; }
+
+  //! Drop the window (a new segment starts).
+  void clear();
+
+private:
+  void traceAll(const Frame &frame);
+  void activatePoints(const Keyframe &newest);
+  //! Optimise, check, build the tracking reference, drop points out of view, new immature points, marginalise.
+  void finishKeyframe(const KeyframePtr &kf);
+  void buildReferencePoints();
+  void dropPointsOutOfView(const Keyframe &newest);
+  void makeNewImmaturePoints(Keyframe &kf);
+  void marginalize(int keyframeId);
+
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+  std::vector<KeyframePtr> m_window; //!< oldest first
+  bool m_photometricCalibration;
+  bool m_initializationFailed = false;
+};
+} // namespace hslam
+
+#endif

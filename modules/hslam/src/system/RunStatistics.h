@@ -1,0 +1,57 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file RunStatistics.h
+  \brief Timings and counters of a run (tracking per frame, mapping per keyframe) and process memory.
+
+  Threading: tracking and mapping threads record into it concurrently; one mutex, held for a push_back.
+*/
+#ifndef HSLAM_SYSTEM_RUN_STATISTICS_H
+#define HSLAM_SYSTEM_RUN_STATISTICS_H
+
+#include <visp3/core/vpConfig.h>
+
+#include <mutex>
+#include <vector>
+
+namespace hslam
+{
+//! Nearest-rank percentile (q in [0, 1]) of a list of values; 0 for an empty list. Median: q = 0.5.
+VISP_EXPORT double percentile(std::vector<double> values, double q);
+
+/*!
+  A field of /proc/self/status in megabytes (e.g. "VmHWM:" peak resident set, "VmRSS:" current), 0 when the
+  file or the field is missing (non-Linux systems).
+*/
+VISP_EXPORT double processMemoryMb(const char *field);
+
+//! Monotonic clock, milliseconds.
+VISP_EXPORT double nowMs();
+//! CPU time consumed by the calling thread, milliseconds (insensitive to other processes; for profiling logs).
+VISP_EXPORT double threadCpuMs();
+
+class VISP_EXPORT RunStatistics
+{
+public:
+  void addTrackingMs(double ms);
+  void addInitializationMs(double ms);
+  void addKeyframeMappingMs(double ms);
+  void addFrameMappingMs(double ms);
+
+  struct Summary {
+    double trackingMsMedian = 0., trackingMsP95 = 0., trackingMsMax = 0.;
+    double initializationMsMedian = 0.;
+    double keyframeMsMedian = 0., keyframeMsP95 = 0.;
+    double frameMappingMsMedian = 0.;
+  };
+  Summary summary() const;
+  void clear();
+
+private:
+  mutable std::mutex m_mutex;
+  std::vector<double> m_trackingMs, m_initializationMs, m_keyframeMs, m_frameMappingMs;
+};
+} // namespace hslam
+
+#endif

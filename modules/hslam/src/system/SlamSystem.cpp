@@ -1,0 +1,553 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "system/SlamSystem.h"
+
+#include "mapping/TwoViewInitializer.h"
+#include "math/ViSPConversions.h"
+#include "system/LocalMapper.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamLog.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace hslam
+{
+namespace
+{
+//! Frames tracked backwards after initialisation need at least this share of inlier residuals (see the backfill).
+constexpr double kMinBackfillInlierRatio = 0.75;
+//! DSO's keyframe flow weights are expressed for a 640 x 480 image: (640 + 480) pixels.
+constexpr double kDsoReferenceWidthPlusHeight = 640. + 480.;
+
+std::string where(int line)
+{
+  return std::string(__FILE__) + ":" + std::to_string(line) + ": ";
+}
+} // namespace
+
+SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &parameters,
+                       const vpHSlamPhotometricCalibration &photometric)
+    : m_params(parameters),
+      m_preprocessor(camera, photometric, parameters.system.usePhotometricCalibration, parameters.tracker)
+{
+  m_params.validate();
+  const bool calibrated = m_preprocessor.usesPhotometricCalibration();
+  OrbExtractorOptions orbOptions;
+  orbOptions.maxFeatures = m_params.initializer.orbFeatures;
+  m_initializer = std::make_unique<TwoViewInitializer>(m_params.initializer, m_preprocessor.intrinsics(), orbOptions);
+  m_tracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
+  m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
+  m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
+                                           m_preprocessor.height(), calibrated);
+  if (!m_params.system.deterministic) {
+    startMappingThread();
+  }
+}
+
+SlamSystem::~SlamSystem()
+{
+  stopMappingThread();
+  VP_HSLAM_LOG(vpHSlamLog::debug, "CPU time (ms): preprocessing " << m_cpuPreprocess << ", initialisation "
+                                                                  << m_cpuInitialize << ", tracking " << m_cpuTrack
+                                                                  << ", mapping keyframes " << m_cpuMapKeyframes
+                                                                  << ", mapping other frames " << m_cpuMapFrames);
+}
+
+vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timestamp, double exposure)
+{
+  if (m_frames.load() > 0 && !(timestamp > m_lastTimestamp)) {
+    std::ostringstream msg;
+    msg << where(__LINE__) << "timestamp " << timestamp << " s of frame " << m_nextFrameId
+        << " does not increase (previous " << m_lastTimestamp << " s)";
+    throw vpHSlamException(vpHSlamException::invalidTimestamps, msg.str());
+  }
+  const double t0 = nowMs();
+  m_frameStartMs = t0;
+  const double c0 = threadCpuMs();
+  FramePtr frame = m_preprocessor.process(I, timestamp, exposure, m_nextFrameId);
+  const double c1 = threadCpuMs();
+  m_cpuPreprocess += c1 - c0;
+  ++m_nextFrameId;
+  ++m_frames;
+  m_lastTimestamp = timestamp;
+  {
+    std::lock_guard<std::mutex> lock(m_imageMutex);
+    m_lastImage = frame->raw;
+  }
+  vpHSlam::State state;
+  if (!m_initialized) {
+    state = initialize(frame, I, exposure);
+    m_runStats.addInitializationMs(nowMs() - t0);
+    m_cpuInitialize += threadCpuMs() - c1;
+  } else {
+    m_cpuLastJob = 0.;
+    state = trackInitialized(frame); // records its own tracking time (mapping excluded)
+    if (m_params.system.deterministic) {
+      m_cpuTrack += threadCpuMs() - c1 - m_cpuLastJob;
+    } else {
+      m_cpuTrack += threadCpuMs() - c1;
+    }
+  }
+  if (state == vpHSlam::stateTracking) {
+    ++m_trackedFrames;
+  } else if (state == vpHSlam::stateLost) {
+    ++m_lostFrames;
+  }
+  m_state = state;
+  return state;
+}
+
+vpHSlam::State SlamSystem::initialize(const FramePtr &frame, const vpImage<unsigned char> &I, double exposure)
+{
+  const TwoViewInitializer::State initState = m_initializer->addFrame(frame->raw, frame->id);
+  if (m_initializer->firstFrameId() == frame->id) {
+    m_initFirstFrame = frame; // the initializer (re)started from this frame
+  }
+  if (initState != TwoViewInitializer::initialized) {
+    const TwoViewAttempt &attempt = m_initializer->lastAttempt();
+    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": initialisation against frame "
+                                             << m_initializer->firstFrameId() << ": outcome " << attempt.outcome << ", "
+                                             << attempt.numMatches << " matches, " << attempt.numInliers
+                                             << " inliers, flow " << attempt.medianFlowPx << " px, parallax "
+                                             << attempt.parallaxDeg << " deg, R_H " << attempt.scoreRatioH);
+    // Every frame without a pose is kept (raw, the newest maxFramesToInitialize), whatever the initializer's first
+    // frame: after a restart of the initializer the older ones may still be tracked backwards later.
+    PendingFrame pending;
+    pending.I = I;
+    pending.timestamp = frame->timestamp;
+    pending.exposure = exposure;
+    pending.id = frame->id;
+    m_pendingFrames.push_back(std::move(pending));
+    if (static_cast<int>(m_pendingFrames.size()) > m_params.initializer.maxFramesToInitialize) {
+      m_pendingFrames.erase(m_pendingFrames.begin());
+    }
+    return vpHSlam::stateInitializing;
+  }
+  const TwoViewInitialization &init = m_initializer->result();
+  if (!m_initFirstFrame || m_initFirstFrame->id != init.firstFrameId) {
+    m_initializer->reset();
+    return vpHSlam::stateInitializing;
+  }
+  // Nothing is queued for mapping while initialising: the back end is idle and may be driven from here.
+  synchronize();
+  std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+  const int firstId = m_keyframeCount.load();
+  if (!m_mapper->initialize(m_initFirstFrame, firstId, frame, firstId + 1, init, m_segmentOrigin)) {
+    VP_HSLAM_LOG(vpHSlamLog::info, "initialisation from frames " << init.firstFrameId << " and " << frame->id
+                                                                 << " gave too few points; trying again");
+    m_mapper->clear();
+    m_initializer->setFirstFrame(frame->raw, frame->id);
+    m_initFirstFrame = frame;
+    return vpHSlam::stateInitializing;
+  }
+  m_keyframeCount += 2;
+  const SE3d wMfirst = m_initFirstFrame->cMw.inverse();
+  const SE3d wMsecond = frame->cMw.inverse();
+  m_recorder.addKeyframe(firstId, m_initFirstFrame->id, m_initFirstFrame->timestamp, wMfirst, m_segment);
+  m_recorder.addKeyframe(firstId + 1, frame->id, frame->timestamp, wMsecond, m_segment);
+  m_recorder.addFrame(m_initFirstFrame->id, m_initFirstFrame->timestamp, firstId, SE3d(), m_segment);
+  m_recorder.addFrame(frame->id, frame->timestamp, firstId + 1, SE3d(), m_segment);
+  if (m_initFirstFrame->id != frame->id) {
+    ++m_trackedFrames; // the first frame got its pose now
+  }
+  VP_HSLAM_LOG(vpHSlamLog::info, "initialised from frames " << init.firstFrameId << " and " << frame->id << " ("
+                                                            << init.points.size() << " points, parallax "
+                                                            << init.parallaxDeg << " deg), segment " << m_segment);
+  publishAfterKeyframe();
+  adoptPreparedReference();
+  backfillInitializationFrames(init.c2Mc1, init.firstFrameId, frame->id);
+  m_initialized = true;
+  m_initFirstFrame.reset();
+  m_initializer->reset();
+  m_lastAffine = frame->affine;
+  m_prelastFrameId = -1;
+  m_lastFrameId = frame->id;
+  m_consecutiveFailures = 0;
+  m_framesSinceKeyframeRequest = 0;
+  ++m_segmentsStarted;
+  return vpHSlam::stateTracking;
+}
+
+void SlamSystem::backfillInitializationFrames(const SE3d &c2Mc1, int firstFrameId, int secondFrameId)
+{
+  // Tracked backwards from the second keyframe, each frame starting from its successor's pose moved by the mean
+  // per-frame motion between the two keyframes (constant velocity backwards); past the first keyframe, whose pose
+  // is known, on to the frames seen before the initializer's last restart. Stops at the first failure (older
+  // frames are farther away).
+  const int secondKeyframe = m_keyframeCount.load() - 1;
+  const int steps = secondFrameId - firstFrameId;
+  if (m_pendingFrames.empty() || steps < 1) {
+    m_pendingFrames.clear();
+    return;
+  }
+  if (!m_backfillTracker) {
+    m_backfillTracker = std::make_unique<CoarseTracker>(m_params.tracker, m_preprocessor.usesPhotometricCalibration());
+  }
+  int referenceId = -1;
+  AffineBrightness referenceAffine;
+  double referenceExposure = 1.;
+  if (!m_mapper->prepareTrackingReference(*m_backfillTracker, referenceId, referenceAffine, referenceExposure) ||
+      referenceId != secondKeyframe) {
+    m_pendingFrames.clear();
+    return;
+  }
+  // Motion of one frame step backwards in time, expressed as previousMref -> thisMref = stepBack * previousMref.
+  const SE3d c1Mc2 = c2Mc1.inverse();
+  const SE3d stepBack = SE3d::exp(c1Mc2.log() / static_cast<double>(steps));
+  CoarseMotionHistory history;
+  history.valid = true;
+  history.lastMref = SE3d();                // the second keyframe itself
+  history.prelastMref = stepBack.inverse(); // a virtual frame one step after it
+  history.lastAffine = referenceAffine;
+  int filled = 0;
+  bool crossedFirst = false;
+  for (auto it = m_pendingFrames.rbegin(); it != m_pendingFrames.rend(); ++it) {
+    if (it->id >= secondFrameId || it->id == firstFrameId) {
+      continue;
+    }
+    if (it->id < firstFrameId && !crossedFirst) {
+      // Crossing the first keyframe: its pose relative to the second keyframe is known exactly.
+      history.prelastMref = history.lastMref;
+      history.lastMref = c1Mc2;
+      crossedFirst = true;
+    }
+    FramePtr frame = m_preprocessor.process(it->I, it->timestamp, it->exposure, it->id);
+    SE3d newMref;
+    AffineBrightness affine;
+    CoarseTrackingResult result;
+    // Going back in time the view drifts away from the map; a weakening inlier share marks where the alignment
+    // stops being trustworthy (measured: >= 0.88 for correct poses on the shared sequences, 0.44-0.7 for the
+    // drifting ones of KITTI started at frame 20).
+    if (!m_backfillTracker->trackWithHypotheses(*frame, history, newMref, affine, result) ||
+        result.inlierRatio < kMinBackfillInlierRatio) {
+      break;
+    }
+    m_recorder.addFrame(frame->id, frame->timestamp, secondKeyframe, newMref.inverse(), m_segment);
+    ++m_trackedFrames;
+    ++filled;
+    history.prelastMref = history.lastMref;
+    history.lastMref = newMref;
+    history.lastAffine = affine;
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug,
+               "initialisation: " << filled << " of " << m_pendingFrames.size() << " earlier frames tracked backwards");
+  m_pendingFrames.clear();
+}
+
+void SlamSystem::adoptPreparedReference()
+{
+  std::unique_lock<std::mutex> lock(m_referenceMutex, std::try_to_lock);
+  if (!lock.owns_lock() || !m_preparedReady) {
+    return; // the back end is preparing one: keep the current reference for this frame
+  }
+  m_preparedTracker->setLastRmse(m_tracker->lastRmse()); // DSO's lastCoarseRMSE belongs to the system
+  std::swap(m_tracker, m_preparedTracker);
+  m_trackerRefKeyframe = m_preparedRefKeyframe;
+  m_trackerRefAffine = m_preparedRefAffine;
+  m_trackerRefExposure = m_preparedRefExposure;
+  m_preparedReady = false;
+}
+
+vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
+{
+  const double t0 = m_frameStartMs; // tracking time includes the preprocessing of the frame
+  if (m_restartRequested.exchange(false)) {
+    declareLost(true);
+    return vpHSlam::stateInitializing; // the map is started again: not a loss of tracking
+  }
+  adoptPreparedReference();
+  if (m_trackerRefKeyframe < 0) {
+    declareLost();
+    return vpHSlam::stateLost;
+  }
+  // Motion history from the recorded poses (DSO: from the frame shells, under the pose lock).
+  CoarseMotionHistory history;
+  SE3d wMref, wMlast, wMprelast;
+  wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
+  if (m_lastFrameId >= 0 && m_prelastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast) &&
+      m_recorder.framePose(m_prelastFrameId, wMprelast)) {
+    history.valid = true;
+    history.lastMref = wMlast.inverse() * wMref;
+    history.prelastMref = wMprelast.inverse() * wMref;
+  } else if (m_lastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast)) {
+    // One frame only: no velocity yet; start from the last pose (DSO tries identity from the reference).
+    history.valid = true;
+    history.lastMref = wMlast.inverse() * wMref;
+    history.prelastMref = history.lastMref;
+  }
+  history.lastAffine = m_lastAffine;
+
+  SE3d newMref;
+  AffineBrightness affine;
+  CoarseTrackingResult result;
+  const bool success = m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
+  const bool finite = newMref.translation().allFinite() && newMref.unitQuaternion().coeffs().allFinite() &&
+                      std::isfinite(affine.a) && std::isfinite(affine.b);
+  if (!success) {
+    ++m_consecutiveFailures;
+    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": direct alignment failed ("
+                                             << coarseTrackingStatusName(result.status) << "), "
+                                             << m_consecutiveFailures << " in a row");
+  } else {
+    m_consecutiveFailures = 0;
+  }
+  if (!finite || m_consecutiveFailures > m_params.system.maxTrackingFailures) {
+    m_runStats.addTrackingMs(nowMs() - t0);
+    VP_HSLAM_LOG(vpHSlamLog::warning, "frame " << frame->id << ": tracking lost ("
+                                               << coarseTrackingStatusName(result.status)
+                                               << "); a new map segment will be initialised");
+    declareLost();
+    return vpHSlam::stateLost;
+  }
+  frame->affine = affine;
+  frame->cMw = newMref * wMref.inverse();
+  const SE3d refMc = newMref.inverse();
+  m_recorder.addFrame(frame->id, frame->timestamp, m_trackerRefKeyframe, refMc, m_segment);
+  m_lastAffine = affine;
+  m_prelastFrameId = m_lastFrameId;
+  m_lastFrameId = frame->id;
+
+  // A failed alignment keeps the predicted pose (DSO) but neither makes a keyframe nor feeds mapping.
+  const bool needKeyframe = success && keyframeNeeded(frame, result);
+  m_runStats.addTrackingMs(nowMs() - t0);
+  if (success) {
+    MappingJob job;
+    job.frame = frame;
+    job.referenceKeyframe = m_trackerRefKeyframe;
+    job.refMc = refMc;
+    job.needKeyframe = needKeyframe;
+    deliver(std::move(job));
+  }
+  return vpHSlam::stateTracking;
+}
+
+bool SlamSystem::keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result)
+{
+  ++m_framesSinceKeyframeRequest;
+  const vpHSlamParameters::Tracker &p = m_params.tracker;
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(m_trackerRefExposure, m_trackerRefAffine, frame->exposure, frame->affine, aji, bji);
+  // DSO FullSystem::addActiveFrame: weighted optical flow + brightness change above 1, or the residual doubled.
+  // DSO's flow weights are given per (w + h) of a 640x480 image (setting_maxShiftWeightT = 0.04 (640 + 480)) and
+  // divided by the actual w + h, so the same share of the image diagonal triggers a keyframe at any size.
+  const double sizeScale =
+      kDsoReferenceWidthPlusHeight / static_cast<double>(m_preprocessor.width() + m_preprocessor.height());
+  const double score =
+      sizeScale * (p.maxShiftWeightT * std::sqrt(result.flowT) + p.maxShiftWeightR * std::sqrt(result.flowR) +
+                   p.maxShiftWeightRT * std::sqrt(result.flowRT)) +
+      p.maxAffineWeight * std::fabs(std::log(aji));
+  const double firstRmse = m_tracker->firstRmse();
+  bool need = score > 1. || (std::isfinite(firstRmse) && p.keyframeResidualFactor * firstRmse < result.rmse[0]);
+  if (p.maxFramesBetweenKeyframes > 0 && m_framesSinceKeyframeRequest >= p.maxFramesBetweenKeyframes) {
+    need = true;
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": flow T " << std::sqrt(result.flowT) << " RT "
+                                           << std::sqrt(result.flowRT) << " px, log a_ji " << std::log(aji) << ", rmse "
+                                           << result.rmse[0] << " (first " << firstRmse << "), keyframe score " << score
+                                           << ", hypotheses " << result.hypothesesTried << ", iterations "
+                                           << result.iterations << (need ? " -> keyframe" : ""));
+  if (need) {
+    m_framesSinceKeyframeRequest = 0;
+  }
+  return need;
+}
+
+void SlamSystem::declareLost(bool discardSegment)
+{
+  // Keep the old segment (trajectory, keyframes) and chain the next one to the last known pose; a segment whose
+  // initialisation proved wrong is discarded instead (DSO resets after a failed initialisation).
+  synchronize();
+  {
+    std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+    std::vector<LocalMapper::KeyframeState> states;
+    m_mapper->takeKeyframeStates(states);
+    for (const LocalMapper::KeyframeState &k : states) {
+      m_recorder.updateKeyframe(k.id, k.wMc);
+      m_recorder.setKeyframeInWindow(k.id, false, 0);
+    }
+    m_mapper->clear();
+  }
+  {
+    std::lock_guard<std::mutex> lock(m_referenceMutex);
+    m_preparedReady = false;
+  }
+  {
+    std::lock_guard<std::mutex> lock(m_snapshotMutex);
+    m_snapshotPoints.clear();
+    m_snapshotImmature = 0;
+    m_snapshotMemoryMb = 0.;
+    m_snapshotKeyframesHeld = 0;
+  }
+  if (discardSegment) {
+    const size_t removed = m_recorder.discardSegment(m_segment);
+    m_trackedFrames -= static_cast<unsigned int>(std::min<size_t>(removed, m_trackedFrames.load()));
+    if (m_segmentsStarted.load() > 0) {
+      --m_segmentsStarted;
+    }
+  } else {
+    SE3d wMlast;
+    if (m_recorder.lastFramePose(wMlast)) {
+      m_segmentOrigin = wMlast;
+    }
+  }
+  m_trackerRefKeyframe = -1;
+  m_initialized = false;
+  m_initializer->reset();
+  m_initFirstFrame.reset();
+  m_pendingFrames.clear();
+  m_lastFrameId = m_prelastFrameId = -1;
+  m_consecutiveFailures = 0;
+  if (!discardSegment) {
+    ++m_segment; // a discarded segment's number is used again
+  }
+}
+
+void SlamSystem::reset()
+{
+  synchronize();
+  {
+    std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+    m_mapper->clear();
+  }
+  {
+    std::lock_guard<std::mutex> lock(m_referenceMutex);
+    m_preparedReady = false;
+  }
+  {
+    std::lock_guard<std::mutex> lock(m_snapshotMutex);
+    m_snapshotPoints.clear();
+    m_snapshotImmature = 0;
+    m_snapshotMemoryMb = 0.;
+    m_snapshotKeyframesHeld = 0;
+  }
+  m_recorder.clear();
+  m_runStats.clear();
+  m_initializer->reset();
+  m_initFirstFrame.reset();
+  m_pendingFrames.clear();
+  m_trackerRefKeyframe = -1;
+  m_initialized = false;
+  m_segment = 0;
+  m_segmentOrigin = SE3d();
+  m_lastFrameId = m_prelastFrameId = -1;
+  m_nextFrameId = 0;
+  m_lastTimestamp = 0.;
+  m_consecutiveFailures = 0;
+  m_framesSinceKeyframeRequest = 0;
+  {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    m_pendingKeyframeRef = -1;
+  }
+  m_state = vpHSlam::stateInitializing;
+  m_frames = 0;
+  m_trackedFrames = 0;
+  m_lostFrames = 0;
+  m_mappingSkipped = 0;
+  m_keyframeCount = 0;
+  m_segmentsStarted = 0;
+  m_restartRequested = false;
+  std::lock_guard<std::mutex> lock(m_imageMutex);
+  m_lastImage.resize(0, 0);
+}
+
+vpHomogeneousMatrix SlamSystem::get_cMw() const
+{
+  SE3d wMc;
+  if (m_recorder.lastFramePose(wMc)) {
+    return toVpHomogeneousMatrix(wMc.inverse());
+  }
+  return vpHomogeneousMatrix();
+}
+
+bool SlamSystem::hasPose() const
+{
+  return m_recorder.frameCount() > 0;
+}
+
+std::vector<vpHSlam::Keyframe> SlamSystem::keyframes() const
+{
+  const std::vector<TrajectoryRecorder::KeyframeRecord> records = m_recorder.keyframes();
+  std::vector<vpHSlam::Keyframe> out;
+  out.reserve(records.size());
+  for (size_t i = 0; i < records.size(); ++i) {
+    if (records[i].discarded) {
+      continue;
+    }
+    vpHSlam::Keyframe k;
+    k.id = static_cast<unsigned int>(i);
+    k.frameIndex = static_cast<unsigned int>(records[i].frameIndex);
+    k.timestamp = records[i].timestamp;
+    k.wMc = toVpHomogeneousMatrix(records[i].wMc);
+    k.inWindow = records[i].inWindow;
+    k.segment = records[i].segment;
+    k.activePoints = records[i].activePoints;
+    out.push_back(k);
+  }
+  return out;
+}
+
+std::vector<vpColVector> SlamSystem::activePoints(std::vector<double> *depths) const
+{
+  std::vector<Eigen::Vector3d> points;
+  {
+    std::lock_guard<std::mutex> lock(m_snapshotMutex);
+    points = m_snapshotPoints;
+  }
+  SE3d wMc;
+  const bool havePose = m_recorder.lastFramePose(wMc);
+  const SE3d cMw = wMc.inverse();
+  std::vector<vpColVector> out;
+  out.reserve(points.size());
+  if (depths) {
+    depths->clear();
+    depths->reserve(points.size());
+  }
+  for (const Eigen::Vector3d &p : points) {
+    vpColVector v(3);
+    v[0] = p.x();
+    v[1] = p.y();
+    v[2] = p.z();
+    out.push_back(v);
+    if (depths) {
+      depths->push_back(havePose ? (cMw * p).z() : p.z());
+    }
+  }
+  return out;
+}
+
+vpHSlam::Statistics SlamSystem::statistics() const
+{
+  vpHSlam::Statistics s;
+  s.frames = m_frames.load();
+  s.trackedFrames = m_trackedFrames.load();
+  s.keyframes = static_cast<unsigned int>(m_recorder.keyframeCount());
+  s.segments = m_segmentsStarted;
+  s.lostFrames = m_lostFrames.load();
+  s.mappingSkippedFrames = m_mappingSkipped.load();
+  const RunStatistics::Summary t = m_runStats.summary();
+  s.trackingMsMedian = t.trackingMsMedian;
+  s.trackingMsP95 = t.trackingMsP95;
+  s.trackingMsMax = t.trackingMsMax;
+  s.initializationMsMedian = t.initializationMsMedian;
+  s.mappingMsPerKeyframeMedian = t.keyframeMsMedian;
+  s.mappingMsPerKeyframeP95 = t.keyframeMsP95;
+  s.mappingMsPerFrameMedian = t.frameMappingMsMedian;
+  std::lock_guard<std::mutex> lock(m_snapshotMutex);
+  s.activePoints = static_cast<unsigned int>(m_snapshotPoints.size());
+  s.immaturePoints = m_snapshotImmature;
+  s.mapMemoryMb = m_snapshotMemoryMb;
+  s.keyframesHeld = m_snapshotKeyframesHeld;
+  s.mapMemoryMbPerKeyframe = m_snapshotKeyframesHeld > 0 ? m_snapshotMemoryMb / m_snapshotKeyframesHeld : 0.;
+  return s;
+}
+
+void SlamSystem::rectifiedImage(vpImage<unsigned char> &I) const
+{
+  std::lock_guard<std::mutex> lock(m_imageMutex);
+  I = m_lastImage;
+}
+} // namespace hslam

@@ -1,0 +1,186 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file SlamSystem.h
+  \brief The system behind vpHSlam: front end (preprocessing, initialisation, direct tracking, keyframe decision),
+  hand-over to the back end (LocalMapper) in the caller's thread or a mapping thread, trajectory and statistics.
+
+  Flow per frame (DSO FullSystem::addActiveFrame / deliverTrackedFrame, with a two-view initializer):
+  1. FramePreprocessor: rectify, photometric correction, pyramid.
+  2. Not initialised: TwoViewInitializer on the rectified 8-bit image; on success LocalMapper::initialize() makes
+     the first two keyframes (synchronously: nothing else to do then) and the first tracking reference.
+  3. Initialised: swap in the newest tracking reference if the mapper prepared one, track against it with motion
+     hypotheses (CoarseTracker::trackWithHypotheses), record the pose relative to the reference keyframe, decide
+     whether the frame becomes a keyframe (DSO's flow / brightness / residual rule).
+  Frames seen between the two initial keyframes are tracked backwards against the new map once it exists, so
+     the trajectory covers the sequence from its first frame (kept as raw images meanwhile, at most
+     Initializer::maxFramesToInitialize of them).
+  4. Deliver: deterministic mode maps at once (makeKeyframe or makeNonKeyframe); real-time mode queues the frame
+     for the mapping thread (DSO mappingLoop): when frames pile up, non-keyframes are only traced or skipped, and
+     a pending keyframe request is served by the newest frame.
+
+  Threading and ownership:
+  - tracking thread (the caller of track()): owns the preprocessor, the initializer, the active CoarseTracker,
+    the motion history.
+  - mapping thread (real time) or the caller (deterministic): owns the LocalMapper (window, points) and the spare
+    CoarseTracker it prepares for the tracking thread. m_mapperMutex is held while a job runs, so reset() and
+    initialisation (caller's thread) never run concurrently with a job.
+  - shared: the TrajectoryRecorder and RunStatistics (own mutexes), the job queue (m_queueMutex), the prepared
+    tracking reference (m_referenceMutex; the tracking thread only try-locks it, so it never waits), the display
+    snapshot (m_snapshotMutex).
+*/
+#ifndef HSLAM_SYSTEM_SLAM_SYSTEM_H
+#define HSLAM_SYSTEM_SLAM_SYSTEM_H
+
+#include "map/Frame.h"
+#include "math/SE3.h"
+#include "system/FramePreprocessor.h"
+#include "system/RunStatistics.h"
+#include "system/TrajectoryRecorder.h"
+#include "tracking/CoarseTracker.h"
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/hslam/vpHSlam.h>
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <memory>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace hslam
+{
+class LocalMapper;
+class TwoViewInitializer;
+
+class VISP_EXPORT SlamSystem
+{
+public:
+  SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &parameters,
+             const vpHSlamPhotometricCalibration &photometric);
+  ~SlamSystem();
+  SlamSystem(const SlamSystem &) = delete;
+  SlamSystem &operator=(const SlamSystem &) = delete;
+
+  vpHSlam::State track(const vpImage<unsigned char> &I, double timestamp, double exposure);
+
+  vpHSlam::State state() const { return m_state.load(); }
+  vpHomogeneousMatrix get_cMw() const;
+  bool hasPose() const;
+  std::vector<vpHSlam::Keyframe> keyframes() const;
+  std::vector<vpColVector> activePoints(std::vector<double> *depths) const;
+  vpHSlamTrajectory trajectory(int segment) const { return m_recorder.trajectory(segment); }
+  vpHSlamTrajectory keyframeTrajectory(int segment) const { return m_recorder.keyframeTrajectory(segment); }
+  std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
+  vpHSlam::Statistics statistics() const;
+  void synchronize();
+  void reset();
+
+  const FramePreprocessor &preprocessor() const { return m_preprocessor; }
+  void rectifiedImage(vpImage<unsigned char> &I) const;
+  const vpHSlamParameters &parameters() const { return m_params; }
+
+private:
+  //! A tracked frame handed to mapping.
+  struct MappingJob {
+    FramePtr frame;
+    int referenceKeyframe = -1; //!< keyframe id the frame was tracked against
+    SE3d refMc;                 //!< its pose relative to that keyframe
+    bool needKeyframe = false;
+  };
+
+  vpHSlam::State initialize(const FramePtr &frame, const vpImage<unsigned char> &I, double exposure);
+  //! After initialisation: give poses to the frames between the two initial keyframes (tracked backwards).
+  void backfillInitializationFrames(const SE3d &c2Mc1, int firstFrameId, int secondFrameId);
+  vpHSlam::State trackInitialized(const FramePtr &frame);
+  void adoptPreparedReference();
+  bool keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result);
+  void deliver(MappingJob job);
+  //! Tracking is lost (or, with \e discardSegment, the segment's initialisation proved wrong): start a new segment.
+  void declareLost(bool discardSegment = false);
+
+  // Back end (caller's thread in deterministic mode, mapping thread otherwise), with m_mapperMutex held.
+  //! Map one tracked frame; returns the thread CPU time it took, milliseconds.
+  double runJob(const MappingJob &job);
+  void publishAfterKeyframe();
+  void mappingLoop();
+  void stopMappingThread();
+  void startMappingThread();
+
+  vpHSlamParameters m_params;
+  FramePreprocessor m_preprocessor;
+  TrajectoryRecorder m_recorder;
+  RunStatistics m_runStats;
+
+  // ---- tracking thread state
+  std::unique_ptr<TwoViewInitializer> m_initializer;
+  FramePtr m_initFirstFrame; //!< the initializer's current first frame
+  //! A frame seen while initialising, kept as its raw input (cheap) to be tracked once the map exists.
+  struct PendingFrame {
+    vpImage<unsigned char> I;
+    double timestamp = 0.;
+    double exposure = -1.;
+    int id = -1;
+  };
+  std::vector<PendingFrame> m_pendingFrames; //!< frames after m_initFirstFrame, oldest first
+  std::unique_ptr<CoarseTracker> m_backfillTracker;
+  std::unique_ptr<CoarseTracker> m_tracker;
+  int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
+  AffineBrightness m_trackerRefAffine; //!< brightness of the reference when it was set
+  double m_trackerRefExposure = 1.;
+  AffineBrightness m_lastAffine; //!< (a, b) of the last tracked frame
+  int m_framesSinceKeyframeRequest = 0;
+  int m_consecutiveFailures = 0;
+  bool m_initialized = false;
+  unsigned int m_segment = 0;
+  SE3d m_segmentOrigin;                          //!< wMc given to the first keyframe of the current segment
+  int m_lastFrameId = -1, m_prelastFrameId = -1; //!< last two frames with a pose in this segment
+  int m_nextFrameId = 0;
+  double m_frameStartMs = 0.; //!< wall clock at the start of the current track() call, milliseconds
+  double m_lastTimestamp = 0.;
+  std::atomic<vpHSlam::State> m_state{vpHSlam::stateInitializing};
+  std::atomic<unsigned int> m_frames{0}, m_trackedFrames{0}, m_lostFrames{0}, m_mappingSkipped{0};
+  std::atomic<int> m_keyframeCount{0}; //!< keyframe ids handed out (the next id)
+  mutable std::mutex m_imageMutex;
+  vpImage<unsigned char> m_lastImage;             //!< rectified raw image of the last frame (display)
+  std::atomic<unsigned int> m_segmentsStarted{0}; //!< segments that got a map (successful initialisations)
+  std::atomic<bool> m_restartRequested{false};    //!< set by the back end when the initialisation looks wrong
+
+  // ---- back end
+  std::unique_ptr<LocalMapper> m_mapper;
+  std::mutex m_mapperMutex;
+  std::unique_ptr<CoarseTracker> m_preparedTracker; //!< filled by the back end, swapped by the tracking thread
+  int m_preparedRefKeyframe = -1;
+  AffineBrightness m_preparedRefAffine;
+  double m_preparedRefExposure = 1.;
+  bool m_preparedReady = false;
+  std::mutex m_referenceMutex;
+
+  // ---- real-time mapping thread
+  std::thread m_mappingThread;
+  std::deque<MappingJob> m_queue;
+  std::mutex m_queueMutex;
+  std::condition_variable m_queueChanged; //!< a job was queued, or stop was requested
+  std::condition_variable m_jobDone;      //!< the mapping thread finished a job
+  bool m_stopMapping = false;
+  bool m_mappingBusy = false;
+  int m_pendingKeyframeRef = -1; //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
+
+  // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
+  double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread
+  double m_cpuMapKeyframes = 0., m_cpuMapFrames = 0.;                 //!< back end (under m_mapperMutex)
+  double m_cpuLastJob = 0.; //!< deterministic mode: CPU of this frame's back-end job (excluded from tracking)
+
+  // ---- display snapshot
+  mutable std::mutex m_snapshotMutex;
+  std::vector<Eigen::Vector3d> m_snapshotPoints; //!< active points, world
+  unsigned int m_snapshotImmature = 0;
+  double m_snapshotMemoryMb = 0.;
+  unsigned int m_snapshotKeyframesHeld = 0;
+};
+} // namespace hslam
+
+#endif

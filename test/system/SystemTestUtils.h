@@ -1,0 +1,130 @@
+// Helpers of the system tests: run vpHSlam over a synthetic scene or a shared sequence and measure it.
+#ifndef HSLAM_SYSTEM_TEST_UTILS_H
+#define HSLAM_SYSTEM_TEST_UTILS_H
+
+#include <visp3/hslam/vpHSlam.h>
+#include <visp3/hslam/vpHSlamImageSource.h>
+#include <visp3/hslam/vpHSlamSyntheticScene.h>
+#include <visp3/hslam/vpHSlamTrajectory.h>
+#include <visp3/hslam/vpHSlamTrajectoryEvaluator.h>
+
+#include <visp3/core/vpIoTools.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace hslam_test
+{
+//! What a run gave.
+struct SystemRun {
+  std::vector<vpHSlam::State> states;
+  vpHSlamTrajectory trajectory;
+  vpHSlam::Statistics statistics;
+  std::vector<vpHSlam::Keyframe> keyframes;
+};
+
+//! Pinhole camera of a synthetic scene (no distortion, rectification none).
+inline vpHSlamCamera syntheticCamera(const vpHSlamSyntheticScene &scene)
+{
+  const vpCameraParameters K = scene.getCameraParameters();
+  vpHSlamCamera camera(vpHSlamCamera::pinhole, scene.getWidth(), scene.getHeight(), K.get_px(), K.get_py(), K.get_u0(),
+                       K.get_v0());
+  camera.setRectification(vpHSlamCamera::rectifyNone);
+  return camera;
+}
+
+//! Ground truth of a synthetic scene (camera-to-world) for frames [0, count).
+inline vpHSlamTrajectory syntheticGroundTruth(const vpHSlamSyntheticScene &scene, unsigned int count)
+{
+  vpHSlamTrajectory gt;
+  for (unsigned int i = 0; i < count; ++i) {
+    gt.add(scene.getTimestamp(i), scene.getPose(i));
+  }
+  return gt;
+}
+
+/*!
+  Folder of a rendered synthetic sequence (TUM RGB-D layout, see vpHSlamSyntheticScene::writeSequence), rendered
+  once and shared by the test processes (rendering 640x480 frames takes ~0.1 s each): written under a temporary
+  name, then renamed, so concurrent tests never read a half-written sequence.
+*/
+inline std::string syntheticSequence(unsigned int width, unsigned int height, unsigned int frames, unsigned int seed)
+{
+  const char *tmp = std::getenv("TMPDIR");
+  const std::string base = (tmp && *tmp) ? tmp : "/tmp";
+  const std::string dir = base + "/hslam-test-synthetic-" + std::to_string(width) + "x" + std::to_string(height) + "-" +
+                          std::to_string(frames) + "-" + std::to_string(seed);
+  if (pathExists(dir + "/complete")) {
+    return dir;
+  }
+  const std::string staging = dir + ".staging." + std::to_string(::getpid());
+  vpHSlamSyntheticScene scene;
+  scene.configure(width, height, frames, 30., seed);
+  scene.writeSequence(staging);
+  std::ofstream(staging + "/complete") << "done\n";
+  if (std::rename(staging.c_str(), dir.c_str()) != 0) {
+    vpIoTools::remove(staging); // another process finished first
+  }
+  return dir;
+}
+
+//! Feed frames [0, count) of a configured scene to a new system.
+inline SystemRun runSynthetic(const vpHSlamSyntheticScene &scene, unsigned int count, const vpHSlamParameters &params)
+{
+  vpHSlam slam(syntheticCamera(scene), params);
+  SystemRun run;
+  vpImage<unsigned char> I;
+  for (unsigned int i = 0; i < count; ++i) {
+    scene.render(i, I);
+    run.states.push_back(slam.track(I, scene.getTimestamp(i)));
+  }
+  slam.synchronize();
+  run.trajectory = slam.getTrajectory();
+  run.statistics = slam.getStatistics();
+  run.keyframes = slam.getKeyframes();
+  return run;
+}
+
+//! Feed a shared sequence (at most maxFrames) to a new system.
+inline SystemRun runSource(const std::string &path, unsigned int maxFrames, const vpHSlamParameters &params)
+{
+  vpHSlamImageSource::Options options;
+  options.maxFrames = maxFrames;
+  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(path, options);
+  vpHSlam slam(*source, params);
+  SystemRun run;
+  vpImage<unsigned char> I;
+  vpHSlamImageSource::Frame frame;
+  while (source->acquire(I, frame)) {
+    run.states.push_back(slam.track(I, frame.timestamp, frame.exposure));
+  }
+  slam.synchronize();
+  run.trajectory = slam.getTrajectory();
+  run.statistics = slam.getStatistics();
+  run.keyframes = slam.getKeyframes();
+  return run;
+}
+
+//! Sim(3)-aligned ATE RMSE of a run against a ground truth (ground-truth units).
+inline double simAte(const vpHSlamTrajectory &gt, const vpHSlamTrajectory &estimate)
+{
+  vpHSlamTrajectoryEvaluator evaluator(gt, estimate, 0.01);
+  return evaluator.computeAte(vpHSlamTrajectoryEvaluator::alignSim3).error.rmse;
+}
+
+//! Length of a trajectory's path (sum of position steps), ground-truth units.
+inline double pathLength(const vpHSlamTrajectory &traj)
+{
+  double length = 0.;
+  for (size_t i = 1; i < traj.size(); ++i) {
+    length += (traj.get_wMc(i).getTranslationVector() - traj.get_wMc(i - 1).getTranslationVector()).frobeniusNorm();
+  }
+  return length;
+}
+} // namespace hslam_test
+
+#endif
