@@ -57,10 +57,14 @@ case "$cmd" in
     out=${HSLAM_DEMO_DIR:-$build/demo}
     mkdir -p "$out"
     # The main job on data every machine has: a synthetic room rendered from ViSP's image data, with exact
-    # ground truth, read back through the same dataset reader and rectifier a real sequence goes through.
+    # ground truth, run through the same reader, rectifier and odometry as a real sequence, then evaluated.
     echo "== rendering a synthetic sequence into $out/synthetic"
     "$build/tutorials/tutorial-hslam-synthetic" --output "$out/synthetic" --frames 120
-    echo "== running the dataset program on it"
-    "$build/tutorials/tutorial-hslam-dataset" --input "$out/synthetic" --no-display
+    echo "== running H-SLAM on it (deterministic)"
+    "$build/tutorials/tutorial-hslam-dataset" --input "$out/synthetic" --deterministic --no-display \
+      --trajectory "$out/trajectory.txt" --keyframes "$out/keyframes.txt" --stats "$out/stats.json"
+    echo "== evaluating against the exact ground truth"
+    "$build/tutorials/tutorial-hslam-evaluate" --groundtruth "$out/synthetic/groundtruth.txt" \
+      --estimate "$out/trajectory.txt" --plot "$out/top-view.png"
     ;;
 esac

@@ -31,7 +31,11 @@
 #include <sstream>
 #include <string>
 #include <sys/resource.h>
+#include <unistd.h>
 #include <vector>
+
+//! Without a terminal, the progress line is printed once every this many frames.
+constexpr unsigned int kProgressLogEvery = 50;
 
 namespace
 {
@@ -423,6 +427,7 @@ int run(const Arguments &args)
   vpHSlamImageSource::Frame frame;
   double firstTimestamp = 0., lastTimestamp = 0.;
   unsigned int framesRead = 0;
+  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
   std::string error;
   const double t0 = vpTime::measureTimeMs();
   const double cpu0 = processCpuSeconds();
@@ -442,16 +447,18 @@ int run(const Arguments &args)
         }
       }
       const vpHSlam::State state = slam.track(I, frame.timestamp, frame.exposure);
-      if (!args.quiet) {
+      // On a terminal the progress line rewrites itself; in a log (CI, a file) it becomes one line every
+      // kProgressLogEvery frames so the log stays readable.
+      if (!args.quiet && (progressOnTerminal || framesRead % kProgressLogEvery == 0)) {
         const vpHSlam::Statistics s = slam.getStatistics();
-        std::cerr << "\rframe " << frame.index + 1;
+        std::cerr << (progressOnTerminal ? "\r" : "") << "frame " << frame.index + 1;
         if (frameCount > 0) {
           std::cerr << "/" << frameCount;
         }
         std::cerr << "  " << std::setw(12) << std::left << vpHSlam::stateName(state) << std::right << " tracked "
                   << s.trackedFrames << "  kf " << s.keyframes << "  pts " << s.activePoints << "  trk " << std::fixed
                   << std::setprecision(1) << s.trackingMsMedian << " ms  map " << s.mappingMsPerKeyframeMedian
-                  << " ms/kf   " << std::flush;
+                  << " ms/kf   " << (progressOnTerminal ? "" : "\n") << std::flush;
       }
 #if defined(VISP_HAVE_X11)
       if (display) {
@@ -488,7 +495,7 @@ int run(const Arguments &args)
   slam.synchronize();
   const double wallS = (vpTime::measureTimeMs() - t0) / 1000.;
   const double cpuS = processCpuSeconds() - cpu0;
-  if (!args.quiet) {
+  if (!args.quiet && progressOnTerminal) {
     std::cerr << std::endl;
   }
   if (g_interrupted) {
