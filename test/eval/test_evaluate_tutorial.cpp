@@ -1,49 +1,27 @@
 // End to end: runs the built tutorial-hslam-evaluate and parses its key=value output.
 // The program is found relative to this test executable (<build>/test/ -> <build>/tutorials/).
 #include "HSlamTestData.h"
+#include "HSlamTestPrograms.h"
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace
 {
 std::string tutorialPath()
 {
-  char self[4096];
-  const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);
-  if (n <= 0) {
-    return std::string();
-  }
-  std::string dir(self, static_cast<size_t>(n));
-  dir = dir.substr(0, dir.find_last_of('/'));
-  const std::string path = dir + "/../tutorials/tutorial-hslam-evaluate";
-  return hslam_test::pathExists(path) ? path : std::string();
+  return hslam_test::builtTutorialPath("tutorial-hslam-evaluate");
 }
 
-struct RunResult {
-  int exitCode = -1;
-  std::string output; // stdout and stderr
-};
+using RunResult = hslam_test::ProgramRun;
 
 RunResult runTutorial(const std::string &arguments)
 {
-  RunResult result;
-  FILE *pipe = ::popen((tutorialPath() + " " + arguments + " 2>&1").c_str(), "r");
-  if (!pipe) {
-    return result;
-  }
-  char buffer[512];
-  while (std::fgets(buffer, sizeof(buffer), pipe)) {
-    result.output += buffer;
-  }
-  const int status = ::pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return hslam_test::runProgram(tutorialPath(), arguments);
 }
 
 //! Value of "key=<number>" at the start of an output line, NaN when absent.

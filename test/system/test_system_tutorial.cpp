@@ -2,6 +2,7 @@
 // JSON, option errors, an empty input, and Ctrl-C (SIGINT) in the middle of a run.
 // The program is found relative to this test executable (<build>/test/ -> <build>/tutorials/).
 #include "HSlamTestData.h"
+#include "HSlamTestPrograms.h"
 #include "SystemTestUtils.h"
 
 #include <gtest/gtest.h>
@@ -24,36 +25,14 @@ constexpr unsigned int kWidth = 640, kHeight = 480, kFrames = 100, kSeed = 3;
 
 std::string tutorialPath()
 {
-  char self[4096];
-  const ssize_t n = ::readlink("/proc/self/exe", self, sizeof(self) - 1);
-  if (n <= 0) {
-    return std::string();
-  }
-  std::string dir(self, static_cast<size_t>(n));
-  dir = dir.substr(0, dir.find_last_of('/'));
-  const std::string path = dir + "/../tutorials/tutorial-hslam-dataset";
-  return hslam_test::pathExists(path) ? path : std::string();
+  return hslam_test::builtTutorialPath("tutorial-hslam-dataset");
 }
 
-struct RunResult {
-  int exitCode = -1;
-  std::string output; // stdout and stderr
-};
+using RunResult = hslam_test::ProgramRun;
 
 RunResult runTutorial(const std::string &arguments)
 {
-  RunResult result;
-  FILE *pipe = ::popen((tutorialPath() + " " + arguments + " 2>&1").c_str(), "r");
-  if (!pipe) {
-    return result;
-  }
-  char buffer[512];
-  while (std::fgets(buffer, sizeof(buffer), pipe)) {
-    result.output += buffer;
-  }
-  const int status = ::pclose(pipe);
-  result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
+  return hslam_test::runProgram(tutorialPath(), arguments);
 }
 
 std::string readFile(const std::string &path)

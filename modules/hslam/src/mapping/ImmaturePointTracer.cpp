@@ -3,6 +3,7 @@
  */
 #include "mapping/ImmaturePointTracer.h"
 
+#include "common/RobustWeights.h"
 #include "map/AffineBrightness.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -56,7 +57,7 @@ constexpr float kMinRelativeDirectionNorm = 1e-6f;
 inline float huberEnergy(float residual, float threshold, float &weight)
 {
   const float absResidual = std::fabs(residual);
-  weight = absResidual < threshold ? 1.f : threshold / absResidual;
+  weight = huberWeight(absResidual, threshold);
   return weight * residual * residual * (2.f - weight);
 }
 
@@ -134,7 +135,7 @@ bool ImmaturePointTracer::createImmaturePoint(const Frame &host, float u, float 
     }
     pt.patch[static_cast<size_t>(k)] = c[0];
     // DSO: gradient-dependent weight c^2 / (c^2 + |grad|^2), strong edges count less (they are less reliable).
-    pt.patchWeight[static_cast<size_t>(k)] = m_gradientWeightCSq / (m_gradientWeightCSq + c.tail<2>().squaredNorm());
+    pt.patchWeight[static_cast<size_t>(k)] = gradientWeight(m_gradientWeightCSq, c.tail<2>().squaredNorm());
   }
   // DSO: the point is an outlier in a frame when its summed pattern energy exceeds pattern size x outlier energy.
   pt.energyThreshold = static_cast<float>(kPatternSize) * m_outlierEnergyPerPixel;

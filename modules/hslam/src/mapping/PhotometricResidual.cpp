@@ -3,6 +3,7 @@
  */
 #include "mapping/PhotometricResidual.h"
 
+#include "common/RobustWeights.h"
 #include "map/AffineBrightness.h"
 
 #include <cmath>
@@ -74,7 +75,7 @@ ResidualState evaluatePattern(const PhotometricSettings &settings, const Pyramid
     sum += wGrad * huberEnergy(r, settings.huberThreshold);
     if (lin) {
       const double absR = std::fabs(r);
-      const double wHuber = absR <= settings.huberThreshold ? 1. : settings.huberThreshold / absR;
+      const double wHuber = huberWeight(absR, settings.huberThreshold);
       lin->r[static_cast<size_t>(k)] = r;
       lin->weight[static_cast<size_t>(k)] = wGrad * wHuber;
       const double gu = static_cast<double>(hit[1]) * K.fx; // dI/du * fx
@@ -117,7 +118,7 @@ bool samplePatch(const PyramidLevel &host, double u, double v, double gradientWe
     }
     const Eigen::Vector3f c = host.interpolate(uk, vk);
     p[static_cast<size_t>(k)] = c[0];
-    w[static_cast<size_t>(k)] = static_cast<float>(c2 / (c2 + static_cast<double>(c[1] * c[1] + c[2] * c[2])));
+    w[static_cast<size_t>(k)] = static_cast<float>(gradientWeight(c2, static_cast<double>(c[1] * c[1] + c[2] * c[2])));
   }
   patch = p;
   weight = w;

@@ -356,6 +356,21 @@ bool SlamSystem::keyframeNeeded(const FramePtr &frame, const CoarseTrackingResul
   return need;
 }
 
+void SlamSystem::dropPreparedReferenceAndSnapshot()
+{
+  {
+    std::lock_guard<std::mutex> lock(m_referenceMutex);
+    m_preparedReady = false;
+  }
+  {
+    std::lock_guard<std::mutex> lock(m_snapshotMutex);
+    m_snapshotPoints.clear();
+    m_snapshotImmature = 0;
+    m_snapshotMemoryMb = 0.;
+    m_snapshotKeyframesHeld = 0;
+  }
+}
+
 void SlamSystem::declareLost(bool discardSegment)
 {
   // Keep the old segment (trajectory, keyframes) and chain the next one to the last known pose; a segment whose
@@ -371,17 +386,7 @@ void SlamSystem::declareLost(bool discardSegment)
     }
     m_mapper->clear();
   }
-  {
-    std::lock_guard<std::mutex> lock(m_referenceMutex);
-    m_preparedReady = false;
-  }
-  {
-    std::lock_guard<std::mutex> lock(m_snapshotMutex);
-    m_snapshotPoints.clear();
-    m_snapshotImmature = 0;
-    m_snapshotMemoryMb = 0.;
-    m_snapshotKeyframesHeld = 0;
-  }
+  dropPreparedReferenceAndSnapshot();
   if (discardSegment) {
     const size_t removed = m_recorder.discardSegment(m_segment);
     m_trackedFrames -= static_cast<unsigned int>(std::min<size_t>(removed, m_trackedFrames.load()));
@@ -413,17 +418,7 @@ void SlamSystem::reset()
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     m_mapper->clear();
   }
-  {
-    std::lock_guard<std::mutex> lock(m_referenceMutex);
-    m_preparedReady = false;
-  }
-  {
-    std::lock_guard<std::mutex> lock(m_snapshotMutex);
-    m_snapshotPoints.clear();
-    m_snapshotImmature = 0;
-    m_snapshotMemoryMb = 0.;
-    m_snapshotKeyframesHeld = 0;
-  }
+  dropPreparedReferenceAndSnapshot();
   m_recorder.clear();
   m_runStats.clear();
   m_initializer->reset();

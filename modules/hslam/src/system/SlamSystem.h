@@ -101,6 +101,8 @@ private:
   void deliver(MappingJob job);
   //! Tracking is lost (or, with \e discardSegment, the segment's initialisation proved wrong): start a new segment.
   void declareLost(bool discardSegment = false);
+  //! Forgets the prepared tracking reference and empties the published map snapshot (after the map was cleared).
+  void dropPreparedReferenceAndSnapshot();
 
   // Back end (caller's thread in deterministic mode, mapping thread otherwise), with m_mapperMutex held.
   //! Map one tracked frame; returns the thread CPU time it took, milliseconds.

@@ -5,6 +5,7 @@
 // re-implemented; see CoarseTracker.h for the model and the conventions.
 #include "tracking/CoarseTracker.h"
 
+#include "common/RobustWeights.h"
 #include <visp3/hslam/vpHSlamException.h>
 
 #include <Eigen/Cholesky>
@@ -307,7 +308,7 @@ void CoarseTracker::computeResiduals(int level, int begin, int end, float cutoff
       ++stats.numSaturated;
       continue;
     }
-    const float hw = absRes < huber ? 1.f : huber / absRes;
+    const float hw = huberWeight(absRes, huber);
     stats.energy += static_cast<double>(hw * residual * residual * (2.f - hw));
     m_bufIdepth[k] = newIdepth;
     m_bufU[k] = u;
