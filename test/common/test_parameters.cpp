@@ -49,11 +49,24 @@ void writeText(const std::string &path, const std::string &text)
   file << text;
 }
 
+//! Files the tests wrote; removed when the test program exits so runs leave nothing behind in the temp folder.
+struct TempFiles {
+  std::vector<std::string> paths;
+  ~TempFiles()
+  {
+    for (const std::string &path : paths) {
+      std::remove(path.c_str());
+    }
+  }
+};
+
 //! A file name private to the running test (each TEST is its own ctest process, possibly run in parallel).
 std::string tempPath(const std::string &suffix)
 {
+  static TempFiles written;
   const ::testing::TestInfo *info = ::testing::UnitTest::GetInstance()->current_test_info();
-  return ::testing::TempDir() + "hslam_params_" + info->name() + "_" + suffix;
+  written.paths.push_back(::testing::TempDir() + "hslam_params_" + info->name() + "_" + suffix);
+  return written.paths.back();
 }
 
 //! "section.key" of every field declared in the header, in order (see the file comment for why).
