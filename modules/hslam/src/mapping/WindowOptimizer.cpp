@@ -50,6 +50,9 @@ WindowOptimizer::WindowOptimizer(const vpHSlamParameters &params)
   }
   m_settings.huberThreshold = params.tracker.huberThreshold;
   m_settings.outlierEnergy = params.tracker.outlierEnergyPerPixel * kPatternSize;
+  m_pool = std::make_unique<WorkerPool>(params.system.workerThreads);
+  m_workerAcc.resize(static_cast<size_t>(m_pool->participants()));
+  m_workerEnergy.resize(static_cast<size_t>(m_pool->participants()));
 }
 
 void WindowOptimizer::setPhotometricallyCalibrated(bool calibrated)
@@ -208,8 +211,67 @@ void WindowOptimizer::prepareContext()
 
 void WindowOptimizer::linearizeAll(const std::vector<int> &order, WindowAccumulator &acc)
 {
-  acc.reset(static_cast<int>(m_frames.size()));
-  linearizeRange(m_ctx, m_points, order, 0, order.size(), m_hxp.data(), acc);
+  const int n = static_cast<int>(m_frames.size());
+  acc.reset(n);
+  if (m_pool->threads() == 0) {
+    // Single range straight into acc: the same sums, in the same order, as before the pool existed.
+    linearizeRange(m_ctx, m_points, order, 0, order.size(), m_hxp.data(), acc);
+    return;
+  }
+  // Each participant writes only the points of its chunk and its own accumulator (WindowLinearization.h).
+  m_pool->run(order.size(), [&](int w, size_t begin, size_t end) {
+    WindowAccumulator &wa = m_workerAcc[static_cast<size_t>(w)];
+    wa.reset(n);
+    linearizeRange(m_ctx, m_points, order, begin, end, m_hxp.data(), wa);
+  });
+  // Fixed participant order (and fixed chunks for a given thread count): deterministic sums. Participants with an
+  // empty chunk were not called, their accumulators may hold stale sums: skip them.
+  for (int w = 0; w < m_pool->participants(); ++w) {
+    size_t begin, end;
+    WorkerPool::chunk(order.size(), m_pool->participants(), w, begin, end);
+    if (begin < end) {
+      acc.add(m_workerAcc[static_cast<size_t>(w)]);
+    }
+  }
+}
+
+void WindowOptimizer::schurAll(const std::vector<int> &order, double lambda, WindowAccumulator &acc)
+{
+  if (m_pool->threads() == 0) {
+    schurRange(m_ctx, m_points, order, 0, order.size(), m_hxp.data(), lambda, acc);
+    return;
+  }
+  const Eigen::Index dim = acc.Hsc.rows();
+  m_pool->run(order.size(), [&](int w, size_t begin, size_t end) {
+    WindowAccumulator &wa = m_workerAcc[static_cast<size_t>(w)];
+    wa.Hsc.setZero(dim, dim);
+    wa.bsc.setZero(dim);
+    schurRange(m_ctx, m_points, order, begin, end, m_hxp.data(), lambda, wa);
+  });
+  for (int w = 0; w < m_pool->participants(); ++w) {
+    size_t begin, end;
+    WorkerPool::chunk(order.size(), m_pool->participants(), w, begin, end);
+    if (begin < end) {
+      acc.Hsc += m_workerAcc[static_cast<size_t>(w)].Hsc;
+      acc.bsc += m_workerAcc[static_cast<size_t>(w)].bsc;
+    }
+  }
+}
+
+double WindowOptimizer::energyAll(const std::vector<int> &order)
+{
+  if (m_pool->threads() == 0) {
+    return energyRange(m_ctx, m_points, order, 0, order.size());
+  }
+  std::fill(m_workerEnergy.begin(), m_workerEnergy.end(), 0.);
+  m_pool->run(order.size(), [&](int w, size_t begin, size_t end) {
+    m_workerEnergy[static_cast<size_t>(w)] = energyRange(m_ctx, m_points, order, begin, end);
+  });
+  double e = 0.;
+  for (double we : m_workerEnergy) {
+    e += we;
+  }
+  return e;
 }
 
 void WindowOptimizer::assembleFullSystem(const WindowAccumulator &acc, Eigen::MatrixXd &H, Eigen::VectorXd &b) const
@@ -300,7 +362,7 @@ void WindowOptimizer::reducedSystem(Eigen::MatrixXd &H, Eigen::VectorXd &b, bool
   prepareContext();
   WindowAccumulator acc;
   linearizeAll(m_allPoints, acc);
-  schurRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), 0., acc);
+  schurAll(m_allPoints, 0., acc);
   assembleFullSystem(acc, H, b);
   H -= acc.Hsc;
   b -= acc.bsc;
@@ -313,7 +375,7 @@ double WindowOptimizer::totalEnergy()
 {
   syncStatesAndPoints();
   prepareContext();
-  return energyRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size()) + priorEnergy();
+  return energyAll(m_allPoints) + priorEnergy();
 }
 
 bool WindowOptimizer::solveStep(double lambda, Eigen::VectorXd &dx)
@@ -322,7 +384,7 @@ bool WindowOptimizer::solveStep(double lambda, Eigen::VectorXd &dx)
   const int dim = n * kFrameDims;
   m_acc.Hsc.setZero();
   m_acc.bsc.setZero();
-  schurRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), lambda, m_acc);
+  schurAll(m_allPoints, lambda, m_acc);
   m_Hred = m_H;
   m_Hred.diagonal() *= (1. + lambda);
   m_Hred -= m_acc.Hsc;
@@ -478,7 +540,7 @@ OptimizationSummary WindowOptimizer::optimize(int maxIterations)
     backupStates();
     applyStep(dx, lambda);
     prepareContext();
-    const double newEnergy = energyRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size()) + priorEnergy();
+    const double newEnergy = energyAll(m_allPoints) + priorEnergy();
     if (newEnergy < energy) {
       energy = newEnergy;
       summary.acceptedEnergies.push_back(energy);

@@ -32,12 +32,16 @@
   (linearisation points, residual lists, Hessian blocks) stays here. Points are found by scanning the window
   keyframes' Keyframe::points for status active (new ones are registered, ones whose status changed are released).
 
-  Threading: not thread-safe; the mapping thread owns it. The per-point passes are range-based (see
-  WindowLinearization.h) so a worker pool can split them.
+  Threading: not thread-safe; the mapping thread owns it. The per-point passes of optimize() and reducedSystem()
+  (linearisation, Schur complement, trial energy) are range-based (see WindowLinearization.h) and split over an
+  owned WorkerPool of system.workerThreads threads plus the calling thread: one accumulator per participant,
+  merged in participant order, so results are deterministic for a given thread count (sums are only reordered
+  between different counts). With workerThreads = 0 the passes run in the caller exactly as a single range.
 */
 #ifndef HSLAM_MAPPING_WINDOW_OPTIMIZER_H
 #define HSLAM_MAPPING_WINDOW_OPTIMIZER_H
 
+#include "common/WorkerPool.h"
 #include "map/Keyframe.h"
 #include "mapping/MarginalizationPrior.h"
 #include "mapping/WindowLinearization.h"
@@ -48,6 +52,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include <memory>
 #include <vector>
 
 namespace hslam
@@ -81,7 +86,10 @@ struct PointActivationResult {
 class VISP_EXPORT WindowOptimizer
 {
 public:
-  //! Takes mapper.* (window, LM, marginalisation) and tracker.* (Huber, gradient weight, outliers, affine priors).
+  /*!
+    Takes mapper.* (window, LM, marginalisation), tracker.* (Huber, gradient weight, outliers, affine priors) and
+    system.workerThreads (threads of the per-point passes; 0 = all in the caller).
+  */
   explicit WindowOptimizer(const vpHSlamParameters &params);
 
   /*!
@@ -160,6 +168,9 @@ private:
   void registerPoint(int host, int pointIndex);
   void prepareContext();
   void linearizeAll(const std::vector<int> &order, WindowAccumulator &acc);
+  //! Adds the Schur terms of points \e order (damping \e lambda) to acc.Hsc / acc.bsc (sized by the caller).
+  void schurAll(const std::vector<int> &order, double lambda, WindowAccumulator &acc);
+  double energyAll(const std::vector<int> &order);
   void assembleFullSystem(const WindowAccumulator &acc, Eigen::MatrixXd &H, Eigen::VectorXd &b) const;
   double priorEnergy() const;
   void addPriors(Eigen::MatrixXd &H, Eigen::VectorXd &b) const;
@@ -195,6 +206,9 @@ private:
 
   WindowContext m_ctx;
   WindowAccumulator m_acc;
+  std::unique_ptr<WorkerPool> m_pool;         //!< system.workerThreads threads (+ the caller)
+  std::vector<WindowAccumulator> m_workerAcc; //!< one per pool participant, merged in participant order
+  std::vector<double> m_workerEnergy;         //!< energyAll(): one partial sum per participant
   Eigen::MatrixXd m_H, m_Hred;
   Eigen::VectorXd m_b, m_bred;
   Eigen::LDLT<Eigen::MatrixXd> m_ldlt;
