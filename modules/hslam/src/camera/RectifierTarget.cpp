@@ -1,4 +1,5 @@
 #include "camera/RectifierTarget.h"
+#include "common/TextParsing.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
@@ -26,9 +27,7 @@ constexpr double kFullMinRayZ = 1e-3;
 
 [[noreturn]] void fail(int line, const std::string &what)
 {
-  std::ostringstream os;
-  os << __FILE__ << ":" << line << ": " << what;
-  throw vpHSlamException(vpHSlamException::unsupported, os.str());
+  throwAt(vpHSlamException::unsupported, __FILE__, static_cast<std::size_t>(line), what);
 }
 
 PinholeTarget fromNormalisedBox(unsigned int width, unsigned int height, double xmin, double xmax, double ymin,

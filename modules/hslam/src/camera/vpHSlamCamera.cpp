@@ -4,6 +4,7 @@
 #include <visp3/hslam/vpHSlamException.h>
 
 #include "camera/CameraModel.h"
+#include "common/TextParsing.h"
 
 #include <cmath>
 #include <sstream>
@@ -22,9 +23,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 [[noreturn]] void fail(int line, const std::string &what)
 {
-  std::ostringstream os;
-  os << __FILE__ << ":" << line << ": " << what;
-  throw vpHSlamException(vpHSlamException::invalidCalibration, os.str());
+  hslam::throwAt(vpHSlamException::invalidCalibration, __FILE__, static_cast<std::size_t>(line), what);
 }
 
 std::string sizeString(unsigned int w, unsigned int h)

@@ -4,6 +4,7 @@
 // Image pyramid: level 0 copied from the input, coarser levels by 2x2 means, gradients by central differences
 // (DSO FrameHessian::makeImages), level count by DSO's pixel-count rule (see ImagePyramid.h).
 #include "features/ImagePyramid.h"
+#include "common/TextParsing.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
@@ -22,9 +23,7 @@ constexpr float kQuarter = 0.25f;
 
 [[noreturn]] void throwInvalid(vpHSlamException::ErrorCode code, int line, const std::string &what)
 {
-  std::ostringstream os;
-  os << __FILE__ << ":" << line << ": ImagePyramid::build: " << what;
-  throw vpHSlamException(code, os.str());
+  throwAt(code, __FILE__, static_cast<std::size_t>(line), "ImagePyramid::build: " + what);
 }
 
 //! Fills (dx, dy) and gradSq of a level whose intensities are set.

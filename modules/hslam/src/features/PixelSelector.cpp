@@ -4,6 +4,7 @@
 // Region-adaptive gradient pixel selection after DSO's PixelSelector2 (Engel et al., "Direct Sparse Odometry"):
 // see PixelSelector.h for the algorithm and the differences (any image size, exact count, seeded randomness).
 #include "features/PixelSelector.h"
+#include "common/TextParsing.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
@@ -41,9 +42,7 @@ constexpr double kPi = 3.14159265358979323846;
 
 [[noreturn]] void throwInvalid(int line, const std::string &what)
 {
-  std::ostringstream os;
-  os << __FILE__ << ":" << line << ": PixelSelector: " << what;
-  throw vpHSlamException(vpHSlamException::invalidArgument, os.str());
+  throwAt(vpHSlamException::invalidArgument, __FILE__, static_cast<std::size_t>(line), "PixelSelector: " + what);
 }
 
 //! Integer hash (murmur3 finaliser style) of the seed, the level and a block: the block's random direction.

@@ -4,6 +4,7 @@
 // Coarse-to-fine direct alignment (DSO CoarseTracker: makeCoarseDepthL0, calcRes, calcGSSSE, trackNewestCoarse),
 // re-implemented; see CoarseTracker.h for the model and the conventions.
 #include "tracking/CoarseTracker.h"
+#include "common/TextParsing.h"
 
 #include "common/RobustWeights.h"
 #include <visp3/hslam/vpHSlamException.h>
@@ -57,9 +58,7 @@ constexpr int kIndexB = 7;
 
 [[noreturn]] void throwError(vpHSlamException::ErrorCode code, int line, const std::string &what)
 {
-  std::ostringstream os;
-  os << __FILE__ << ":" << line << ": CoarseTracker: " << what;
-  throw vpHSlamException(code, os.str());
+  throwAt(code, __FILE__, static_cast<std::size_t>(line), "CoarseTracker: " + what);
 }
 
 inline double nan()
