@@ -2,7 +2,9 @@
 //! Run H-SLAM on a dataset, a video, an image folder or a V4L2 camera: every frame is read from a
 //! vpHSlamImageSource, given to vpHSlam::track(), and the trajectory (TUM, camera-to-world, every frame with a pose),
 //! the keyframes and run statistics (JSON) are written at the end -- also when tracking was lost midway, when the
-//! source failed, or when the run was interrupted with Ctrl-C.
+//! source failed, or when the run was stopped by SIGINT (Ctrl-C), SIGTERM (timeout, systemd, docker stop) or SIGHUP
+//! (the terminal closed); the exit status is then 128 + the signal number, as a shell reports a killed program.
+//! With --skip-unreadable, an image that cannot be decoded is counted as dropped and the run carries on.
 //!
 //!   ./tutorial-hslam-dataset --input ../shared/data/tsukuba_cg_000-149 --deterministic --no-display
 //!       --trajectory tsukuba.txt --keyframes tsukuba-kf.txt --stats tsukuba.json   (one line)
@@ -37,14 +39,54 @@
 //! Without a terminal, the progress line is printed once every this many frames.
 constexpr unsigned int kProgressLogEvery = 50;
 
+//! With --skip-unreadable, the run still stops when this many frames in a row cannot be read: the input is then
+//! broken as a whole (a wrong folder, a dead disk), not a frame here and there.
+constexpr unsigned int kMaxConsecutiveUnreadable = 100;
+
 namespace
 {
-//! Set by SIGINT; the main loop polls it, stops and writes its files (nothing is written from the handler).
-volatile std::sig_atomic_t g_interrupted = 0;
+//! Number of the termination signal received (SIGINT, SIGTERM, SIGHUP), 0 while none: the main loop polls it, stops
+//! and writes its files (nothing is written from the handler).
+volatile std::sig_atomic_t g_signal = 0;
 
-extern "C" void onInterrupt(int)
+extern "C" void onTerminationSignal(int signal)
 {
-  g_interrupted = 1;
+  if (g_signal != 0) {
+    // A second signal while the files are being written: the user insists, end at once (async-signal-safe calls).
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
+    return;
+  }
+  g_signal = signal;
+}
+
+//! The signals that stop a run the way Ctrl-C does.
+const int kTerminationSignals[] = {SIGINT, SIGTERM, SIGHUP};
+
+void installTerminationHandlers()
+{
+  for (int signal : kTerminationSignals) {
+    struct sigaction action {
+    };
+    action.sa_handler = onTerminationSignal;
+    sigemptyset(&action.sa_mask);
+    action.sa_flags = SA_RESTART; // reads of the source are not cut short; the loop stops after the current frame
+    sigaction(signal, &action, nullptr);
+  }
+}
+
+std::string signalName(int signal)
+{
+  switch (signal) {
+  case SIGINT:
+    return "SIGINT";
+  case SIGTERM:
+    return "SIGTERM";
+  case SIGHUP:
+    return "SIGHUP";
+  default:
+    return "signal " + std::to_string(signal);
+  }
 }
 
 struct Arguments {
@@ -61,6 +103,7 @@ struct Arguments {
   std::string logLevel = "warning";
   bool display = true;
   bool quiet = false;
+  bool skipUnreadable = false; //!< count undecodable frames as dropped and carry on (default: stop with the error)
   bool help = false;
 };
 
@@ -70,10 +113,13 @@ void printUsage(const char *program, std::ostream &out)
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--fps HZ] [--mode vo-strict]\n"
          "       [--deterministic] [--speed X] [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt]\n"
-         "       [--keyframes OUT.txt] [--stats OUT.json] [--log-level LEVEL] [--quiet] [--no-display] [--help]\n\n"
+         "       [--keyframes OUT.txt] [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet]\n"
+         "       [--no-display] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
-         "the source or Ctrl-C.\n\n"
+         "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
+         "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
+         "ends the program at once.\n\n"
          "  --input PATH       what to read (required)\n"
          "  --format NAME      input format, detected from PATH's content by default (auto)\n"
          "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
@@ -94,7 +140,13 @@ void printUsage(const char *program, std::ostream &out)
          "  --keyframes FILE   keyframe poses, TUM format\n"
          "  --stats FILE       run statistics as JSON (frames, tracked_frames, keyframes, tracking_ms_median,\n"
          "                     tracking_ms_p95, mapping_ms_per_keyframe_median, peak_rss_mb,\n"
-         "                     memory_mb_per_keyframe, wall_s, cpu_s, ...)\n"
+         "                     memory_mb_per_keyframe, dropped_frames, wall_s, cpu_s, ...)\n"
+         "  --skip-unreadable  an image that cannot be read or decoded is reported, counted as dropped (in the\n"
+         "                     summary and the statistics) and skipped; tracking carries on with the next frame.\n"
+         "                     Without it (default), the run stops at that image with an error naming it. The run\n"
+         "                     stops anyway after "
+      << kMaxConsecutiveUnreadable
+      << " unreadable frames in a row\n"
          "  --log-level LEVEL  library messages on stderr: error, warning (default), info, debug\n"
          "  --quiet            no progress line\n"
          "  --no-display       do not open a window (also when no X display is available)\n"
@@ -181,6 +233,8 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.quiet = true;
     } else if (option == "--no-display") {
       args.display = false;
+    } else if (option == "--skip-unreadable") {
+      args.skipUnreadable = true;
     } else {
       throw vpHSlamException(vpHSlamException::invalidArgument, "unknown option '" + option + "' (see --help)");
     }
@@ -270,10 +324,21 @@ std::string jsonNumber(double x)
   return s.str();
 }
 
-void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std::string &input, double wallS,
-                double cpuS, double videoS, double peakRssMb, bool interrupted, const std::string &error,
-                bool deterministic)
+//! How a run ended, besides what vpHSlam::Statistics says.
+struct RunOutcome {
+  double wallS = 0.;
+  double cpuS = 0.;
+  double videoS = 0.;
+  unsigned int droppedFrames = 0; //!< unreadable frames skipped (--skip-unreadable)
+  int signal = 0;                 //!< termination signal that stopped the run, 0 when none
+  std::string error;              //!< error that stopped the run, empty when none
+};
+
+void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std::string &input,
+                const RunOutcome &outcome, double peakRssMb, bool deterministic)
 {
+  const std::string &error = outcome.error;
+  const double wallS = outcome.wallS, cpuS = outcome.cpuS, videoS = outcome.videoS;
   std::ofstream out(path.c_str());
   if (!out) {
     throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot write the statistics file '" + path + "'");
@@ -297,6 +362,7 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std
       << "  \"input\": \"" << escapedInput << "\",\n"
       << "  \"deterministic\": " << (deterministic ? "true" : "false") << ",\n"
       << "  \"frames\": " << s.frames << ",\n"
+      << "  \"dropped_frames\": " << outcome.droppedFrames << ",\n"
       << "  \"tracked_frames\": " << s.trackedFrames << ",\n"
       << "  \"tracked_share\": " << jsonNumber(s.frames ? double(s.trackedFrames) / s.frames : 0.) << ",\n"
       << "  \"lost_frames\": " << s.lostFrames << ",\n"
@@ -318,7 +384,9 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std
       << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"
       << "  \"video_s\": " << jsonNumber(videoS) << ",\n"
       << "  \"realtime_factor\": " << jsonNumber(wallS > 0. ? videoS / wallS : 0.) << ",\n"
-      << "  \"interrupted\": " << (interrupted ? "true" : "false") << ",\n"
+      << "  \"interrupted\": " << (outcome.signal != 0 ? "true" : "false") << ",\n"
+      << "  \"signal\": " << (outcome.signal != 0 ? "\"" + signalName(outcome.signal) + "\"" : std::string("null"))
+      << ",\n"
       << "  \"error\": " << (error.empty() ? std::string("null") : "\"" + escapedError + "\"") << "\n"
       << "}\n";
   out.flush();
@@ -357,8 +425,7 @@ double processCpuSeconds()
 }
 
 //! Write every requested output; report (do not throw) failures so that each file gets its chance.
-bool writeOutputs(const Arguments &args, const vpHSlam &slam, double wallS, double cpuS, double videoS,
-                  bool interrupted, const std::string &error)
+bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &outcome)
 {
   bool ok = true;
   auto attempt = [&](const std::string &what, const std::function<void()> &write) {
@@ -385,8 +452,7 @@ bool writeOutputs(const Arguments &args, const vpHSlam &slam, double wallS, doub
   }
   if (!args.stats.empty()) {
     attempt(args.stats, [&]() {
-      writeStats(args.stats, stats, args.input, wallS, cpuS, videoS, peakRssMb(), interrupted, error,
-                 slam.getParameters().system.deterministic);
+      writeStats(args.stats, stats, args.input, outcome, peakRssMb(), slam.getParameters().system.deterministic);
     });
   }
   return ok;
@@ -394,6 +460,8 @@ bool writeOutputs(const Arguments &args, const vpHSlam &slam, double wallS, doub
 
 int run(const Arguments &args)
 {
+  // First: a signal during the opening of a long sequence also ends the run cleanly.
+  installTerminationHandlers();
   vpHSlamLog::setSink(vpHSlamLog::stderrSink());
   vpHSlamLog::setLevel(vpHSlamLog::levelFromString(args.logLevel));
   const vpHSlamParameters params = makeParameters(args);
@@ -421,18 +489,35 @@ int run(const Arguments &args)
   display = false;
 #endif
 
-  std::signal(SIGINT, onInterrupt);
   const int frameCount = source->getFrameCount();
   vpImage<unsigned char> I, Irect;
   vpHSlamImageSource::Frame frame;
   double firstTimestamp = 0., lastTimestamp = 0.;
   unsigned int framesRead = 0;
   const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
-  std::string error;
+  RunOutcome outcome;
+  std::string &error = outcome.error;
+  unsigned int consecutiveUnreadable = 0;
   const double t0 = vpTime::measureTimeMs();
   const double cpu0 = processCpuSeconds();
   try {
-    while (!g_interrupted && source->acquire(I, frame)) {
+    while (g_signal == 0) {
+      try {
+        if (!source->acquire(I, frame)) {
+          break;
+        }
+        consecutiveUnreadable = 0;
+      } catch (const vpHSlamException &e) {
+        // The source consumed the frame it could not read: the next acquire() reads the one after.
+        if (!args.skipUnreadable || e.getCode() != vpHSlamException::fileUnreadable ||
+            ++consecutiveUnreadable >= kMaxConsecutiveUnreadable) {
+          throw;
+        }
+        ++outcome.droppedFrames;
+        std::cerr << (progressOnTerminal && !args.quiet ? "\n" : "") << "warning: dropped an unreadable frame ("
+                  << e.getStringMessage() << ")" << std::endl;
+        continue;
+      }
       if (framesRead == 0) {
         firstTimestamp = frame.timestamp;
       }
@@ -493,13 +578,16 @@ int run(const Arguments &args)
     error = e.what();
   }
   slam.synchronize();
-  const double wallS = (vpTime::measureTimeMs() - t0) / 1000.;
-  const double cpuS = processCpuSeconds() - cpu0;
+  const int signal = g_signal; // read once: a signal arriving from now on only ends the program if repeated
+  outcome.signal = signal;
+  outcome.wallS = (vpTime::measureTimeMs() - t0) / 1000.;
+  outcome.cpuS = processCpuSeconds() - cpu0;
+  const double wallS = outcome.wallS, cpuS = outcome.cpuS;
   if (!args.quiet && progressOnTerminal) {
     std::cerr << std::endl;
   }
-  if (g_interrupted) {
-    std::cout << "interrupted: writing what was computed" << std::endl;
+  if (signal != 0) {
+    std::cout << "interrupted by " << signalName(signal) << ": writing what was computed" << std::endl;
   }
   if (!error.empty()) {
     std::cerr << "error after " << framesRead << " frames: " << error << " (writing what was computed)" << std::endl;
@@ -507,9 +595,11 @@ int run(const Arguments &args)
 
   const vpHSlam::Statistics s = slam.getStatistics();
   const double videoS = framesRead > 1 ? (lastTimestamp - firstTimestamp) * framesRead / (framesRead - 1) : 0.;
+  outcome.videoS = videoS;
   std::cout << "frames: " << s.frames << ", tracked: " << s.trackedFrames << " (" << std::fixed << std::setprecision(1)
             << (s.frames ? 100. * s.trackedFrames / s.frames : 0.) << " %), lost: " << s.lostFrames
-            << ", segments: " << s.segments << ", keyframes: " << s.keyframes << "\n"
+            << ", segments: " << s.segments << ", keyframes: " << s.keyframes
+            << (args.skipUnreadable ? ", dropped (unreadable): " + std::to_string(outcome.droppedFrames) : "") << "\n"
             << "tracking: " << std::setprecision(2) << s.trackingMsMedian << " ms median, " << s.trackingMsP95
             << " ms p95; mapping: " << s.mappingMsPerKeyframeMedian << " ms per keyframe (median)\n"
             << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
@@ -519,7 +609,10 @@ int run(const Arguments &args)
     std::cout << "warning: tracking was lost; the trajectory has " << s.segments
               << " map segments with independent scales (see the .segN.txt files)" << std::endl;
   }
-  const bool written = writeOutputs(args, slam, wallS, cpuS, videoS, g_interrupted != 0, error);
+  const bool written = writeOutputs(args, slam, outcome);
+  if (signal != 0) {
+    return 128 + signal; // the shell convention for a program ended by a signal
+  }
   if (framesRead == 0 && error.empty()) {
     std::cerr << "error: no frame could be read from '" << args.input << "'" << std::endl;
     return EXIT_FAILURE;

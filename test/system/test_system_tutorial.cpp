@@ -1,5 +1,6 @@
 // End to end: the dataset program (tutorial-hslam-dataset) on a synthetic sequence: output files, statistics
-// JSON, option errors, an empty input, and Ctrl-C (SIGINT) in the middle of a run.
+// JSON, option errors, an empty input, unreadable images (stop, or skip with --skip-unreadable), and SIGINT,
+// SIGTERM and SIGHUP in the middle of a real-time run (mapping thread busy).
 // The program is found relative to this test executable (<build>/test/ -> <build>/tutorials/).
 #include "HSlamTestData.h"
 #include "HSlamTestPrograms.h"
@@ -7,17 +8,20 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <string>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <thread>
 #include <unistd.h>
+#include <vector>
 
 namespace
 {
@@ -136,41 +140,65 @@ TEST(SystemTutorial, EmptyInputFolderIsAClearError)
   ::rmdir(empty.c_str());
 }
 
+namespace
+{
+/*!
+  A copy of the synthetic sequence's first \e frames frames (symlinks) in a new TUM RGB-D folder, with an
+  undecodable image "rgb/corrupt<k>.png" listed after each frame index in \e corruptAfter (timestamps spread over the
+  following frame period). Returns the folder.
+*/
+std::string sequenceWithCorruptImages(const std::string &dir, const std::string &name, int frames,
+                                      const std::vector<int> &corruptAfter)
+{
+  const std::string broken = scratch(name);
+  EXPECT_EQ(::mkdir(broken.c_str(), 0700), 0);
+  EXPECT_EQ(::mkdir((broken + "/rgb").c_str(), 0700), 0);
+  EXPECT_EQ(::symlink((dir + "/camera.txt").c_str(), (broken + "/camera.txt").c_str()), 0);
+  std::ifstream in((dir + "/rgb.txt").c_str());
+  std::ofstream list((broken + "/rgb.txt").c_str());
+  std::string line;
+  int frame = 0, corrupt = 0;
+  const double period = 1. / 30.;
+  auto addCorrupt = [&](double time, int after) {
+    // Spread over the next frame period: timestamps stay strictly increasing.
+    const int n = static_cast<int>(std::count(corruptAfter.begin(), corruptAfter.end(), after));
+    for (int j = 1; j <= n; ++j) {
+      const std::string file = "rgb/corrupt" + std::to_string(corrupt++) + ".png";
+      std::ofstream(broken + "/" + file) << "not a png\n";
+      list << std::setprecision(17) << time + period * j / (n + 1) << " " << file << "\n";
+    }
+  };
+  while (std::getline(in, line) && frame < frames) {
+    if (line.empty() || line[0] == '#') {
+      continue;
+    }
+    std::istringstream fields(line);
+    double time = 0.;
+    std::string image;
+    fields >> time >> image;
+    EXPECT_EQ(::symlink((dir + "/" + image).c_str(), (broken + "/" + image).c_str()), 0);
+    list << line << "\n";
+    addCorrupt(time, frame);
+    ++frame;
+  }
+  return broken;
+}
+} // namespace
+
 TEST(SystemTutorial, SourceErrorMidwayStillWritesFiles)
 {
   HSLAM_REQUIRE_DATASET_TUTORIAL();
   HSLAM_REQUIRE_SYNTHETIC(dir);
   // The first 30 frames of the synthetic sequence, then an undecodable image.
-  const std::string broken = scratch("broken");
-  ASSERT_EQ(::mkdir(broken.c_str(), 0700), 0);
-  ASSERT_EQ(::mkdir((broken + "/rgb").c_str(), 0700), 0);
-  ASSERT_EQ(::symlink((dir + "/camera.txt").c_str(), (broken + "/camera.txt").c_str()), 0);
-  std::ifstream in((dir + "/rgb.txt").c_str());
-  std::ofstream list((broken + "/rgb.txt").c_str());
-  std::string line;
-  int frames = 0;
-  double lastTime = 0.;
-  while (std::getline(in, line) && frames < 30) {
-    if (line.empty() || line[0] == '#') {
-      continue;
-    }
-    std::istringstream fields(line);
-    std::string name;
-    fields >> lastTime >> name;
-    ASSERT_EQ(::symlink((dir + "/" + name).c_str(), (broken + "/" + name).c_str()), 0);
-    list << line << "\n";
-    ++frames;
-  }
-  std::ofstream(broken + "/rgb/corrupt.png") << "not a png\n";
-  list << (lastTime + 0.1) << " rgb/corrupt.png\n";
-  list.close();
+  const std::string broken = sequenceWithCorruptImages(dir, "broken", 30, {29});
   const std::string traj = scratch("broken-traj.txt"), stats = scratch("broken-stats.json");
   const RunResult r = runTutorial("--input " + broken + " --deterministic --no-display --quiet --trajectory " + traj +
                                   " --stats " + stats);
   EXPECT_NE(r.exitCode, 0) << r.output;
-  EXPECT_NE(r.output.find("corrupt.png"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("corrupt0.png"), std::string::npos) << r.output;
   const std::string json = readFile(stats);
   EXPECT_EQ(jsonValue(json, "frames"), 30.);
+  EXPECT_EQ(jsonValue(json, "dropped_frames"), 0.);
   EXPECT_NE(json.find("\"error\": \""), std::string::npos) << json;
   EXPECT_EQ(static_cast<double>(countPoseLines(traj)), jsonValue(json, "tracked_frames"));
   EXPECT_GE(jsonValue(json, "tracked_frames"), 28.);
@@ -179,32 +207,101 @@ TEST(SystemTutorial, SourceErrorMidwayStillWritesFiles)
   vpIoTools::remove(broken);
 }
 
-TEST(SystemTutorial, CtrlCStopsAndWritesWhatWasComputed)
+TEST(SystemTutorial, SkipUnreadableDropsCorruptFramesAndCarriesOn)
 {
   HSLAM_REQUIRE_DATASET_TUTORIAL();
   HSLAM_REQUIRE_SYNTHETIC(dir);
-  const std::string traj = scratch("int-traj.txt"), stats = scratch("int-stats.json");
+  // 40 good frames; undecodable images in the middle of initialisation, while tracking (two in a row) and at the
+  // end. (Not before the first: sources read the first listed image when they open, for its size.)
+  const std::string broken = sequenceWithCorruptImages(dir, "skip", 40, {3, 20, 20, 39});
+  const std::string traj = scratch("skip-traj.txt"), stats = scratch("skip-stats.json");
+  const RunResult r = runTutorial("--input " + broken + " --skip-unreadable --deterministic --no-display --quiet" +
+                                  " --trajectory " + traj + " --stats " + stats);
+  EXPECT_EQ(r.exitCode, 0) << r.output;
+  for (const char *name : {"corrupt0.png", "corrupt1.png", "corrupt2.png", "corrupt3.png"}) {
+    EXPECT_NE(r.output.find(name), std::string::npos) << r.output;
+  }
+  EXPECT_NE(r.output.find("warning: dropped an unreadable frame ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("dropped (unreadable): 4"), std::string::npos) << r.output;
+  const std::string json = readFile(stats);
+  EXPECT_EQ(jsonValue(json, "frames"), 40.);
+  EXPECT_EQ(jsonValue(json, "dropped_frames"), 4.);
+  EXPECT_NE(json.find("\"error\": null"), std::string::npos) << json;
+  EXPECT_GE(jsonValue(json, "tracked_frames"), 38.);
+  EXPECT_EQ(jsonValue(json, "segments"), 1.);
+  EXPECT_EQ(static_cast<double>(countPoseLines(traj)), jsonValue(json, "tracked_frames"));
+  EXPECT_LT(hslam_test::simAte(vpHSlamTrajectory::readTum(dir + "/groundtruth.txt"), vpHSlamTrajectory::readTum(traj)),
+            0.005);
+  std::remove(traj.c_str());
+  std::remove(stats.c_str());
+  vpIoTools::remove(broken);
+}
+
+TEST(SystemTutorial, SkipUnreadableStillStopsOnAWhollyBrokenInput)
+{
+  HSLAM_REQUIRE_DATASET_TUTORIAL();
+  HSLAM_REQUIRE_SYNTHETIC(dir);
+  // 10 good frames, then 120 undecodable images: the run stops at the 100th in a row, with the error.
+  const std::string broken = sequenceWithCorruptImages(dir, "skip-all", 10, std::vector<int>(120, 9));
+  const std::string stats = scratch("skip-all-stats.json");
+  const RunResult r =
+      runTutorial("--input " + broken + " --skip-unreadable --deterministic --no-display --quiet --stats " + stats);
+  EXPECT_NE(r.exitCode, 0) << r.output;
+  EXPECT_NE(r.output.find("corrupt99.png"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("corrupt100.png"), std::string::npos) << r.output;
+  const std::string json = readFile(stats);
+  EXPECT_EQ(jsonValue(json, "frames"), 10.);
+  EXPECT_EQ(jsonValue(json, "dropped_frames"), 99.);
+  EXPECT_NE(json.find("\"error\": \""), std::string::npos) << json;
+  std::remove(stats.c_str());
+  vpIoTools::remove(broken);
+}
+
+class SystemTutorialSignal : public ::testing::TestWithParam<int>
+{
+};
+
+TEST_P(SystemTutorialSignal, StopsWritesWhatWasComputedAndExitsWith128PlusSignal)
+{
+  HSLAM_REQUIRE_DATASET_TUTORIAL();
+  HSLAM_REQUIRE_SYNTHETIC(dir);
+  const int signal = GetParam();
+  const std::string name = "sig" + std::to_string(signal);
+  const std::string traj = scratch(name + "-traj.txt"), kf = scratch(name + "-kf.txt"),
+                    stats = scratch(name + "-stats.json");
   const std::string program = tutorialPath();
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
   if (pid == 0) {
-    // Real-time mode at the sequence's frame rate: 100 frames last 3.3 s, interrupted after 1.5 s.
+    // Real-time mode (mapping thread) at the sequence's frame rate: 100 frames last 3.3 s, stopped after 1.5 s.
     ::execl(program.c_str(), program.c_str(), "--input", dir.c_str(), "--no-display", "--quiet", "--trajectory",
-            traj.c_str(), "--stats", stats.c_str(), static_cast<char *>(nullptr));
+            traj.c_str(), "--keyframes", kf.c_str(), "--stats", stats.c_str(), static_cast<char *>(nullptr));
     ::_exit(127);
   }
   std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  ::kill(pid, SIGINT);
+  ::kill(pid, signal);
   int status = 0;
   ASSERT_EQ(::waitpid(pid, &status, 0), pid);
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 128 + signal);
   const std::string json = readFile(stats);
   EXPECT_NE(json.find("\"interrupted\": true"), std::string::npos) << json;
+  const char *names[] = {"", "SIGHUP", "SIGINT", "", "", "", "", "", "", "", "", "", "", "", "", "SIGTERM"};
+  EXPECT_NE(json.find(std::string("\"signal\": \"") + names[signal] + "\""), std::string::npos) << json;
   const double frames = jsonValue(json, "frames");
   EXPECT_GT(frames, 5.);
   EXPECT_LT(frames, static_cast<double>(kFrames));
+  EXPECT_GT(jsonValue(json, "tracked_frames"), 0.);
   EXPECT_EQ(static_cast<double>(countPoseLines(traj)), jsonValue(json, "tracked_frames"));
+  EXPECT_EQ(static_cast<double>(countPoseLines(kf)), jsonValue(json, "keyframes"));
   std::remove(traj.c_str());
+  std::remove(kf.c_str());
   std::remove(stats.c_str());
 }
+
+INSTANTIATE_TEST_SUITE_P(TerminationSignals, SystemTutorialSignal, ::testing::Values(SIGINT, SIGTERM, SIGHUP),
+                         [](const ::testing::TestParamInfo<int> &info) {
+                           return info.param == SIGINT    ? std::string("SIGINT")
+                                  : info.param == SIGTERM ? std::string("SIGTERM")
+                                                          : std::string("SIGHUP");
+                         });

@@ -82,6 +82,9 @@ bool IndexedImageSource::acquire(vpImage<unsigned char> &I, Frame &frame)
     return false;
   }
   const IndexedFrame &f = m_frames[m_next];
+  // Consumed before it is read: after a frame that throws, the next acquire() reads the following one (a program
+  // may skip unreadable frames), instead of failing on the same file for ever.
+  ++m_next;
   if (f.entry.empty()) {
     readGreyImage(f.path, I);
   } else {
@@ -93,11 +96,10 @@ bool IndexedImageSource::acquire(vpImage<unsigned char> &I, Frame &frame)
                                std::to_string(I.getHeight()) + " but the calibration '" + m_cameraFile + "' is " +
                                std::to_string(m_camera.getWidth()) + "x" + std::to_string(m_camera.getHeight()));
   }
-  frame.index = static_cast<unsigned int>(m_next);
+  frame.index = static_cast<unsigned int>(m_next - 1);
   frame.timestamp = f.timestamp;
   frame.exposure = f.exposure;
   frame.name = f.path;
-  ++m_next;
   return true;
 }
 

@@ -82,9 +82,10 @@ bool VideoSource::decodeNext(vpImage<unsigned char> &I)
   try {
     m_reader.acquire(I);
   } catch (const vpException &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "video '" + m_path + "', frame " +
-                                                                 std::to_string(m_fileIndex) + ": " +
-                                                                 e.getStringMessage());
+    const std::string message =
+        "video '" + m_path + "', frame " + std::to_string(m_fileIndex) + ": " + e.getStringMessage();
+    ++m_fileIndex; // consumed: the next frame keeps its own index and timestamp
+    throw vpHSlamException(vpHSlamException::fileUnreadable, message);
   }
   if (I.getSize() == 0) {
     m_ended = true;

@@ -115,7 +115,9 @@ public:
 
   /*!
     Next frame. \return false at the end of the sequence (no exception); true with I and frame filled otherwise.
-    \exception vpHSlamException on a corrupt or unreadable frame, or inconsistent metadata.
+    \exception vpHSlamException on a corrupt or unreadable frame, or inconsistent metadata. The frame that threw is
+    consumed: the next call delivers the following frame (so a program may skip unreadable frames, see
+    tutorial-hslam-dataset --skip-unreadable).
   */
   virtual bool acquire(vpImage<unsigned char> &I, Frame &frame) = 0;
 
