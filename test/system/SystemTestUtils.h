@@ -2,6 +2,8 @@
 #ifndef HSLAM_SYSTEM_TEST_UTILS_H
 #define HSLAM_SYSTEM_TEST_UTILS_H
 
+#include "HSlamTestData.h"
+
 #include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
 #include <visp3/hslam/vpHSlamSyntheticScene.h>

@@ -59,6 +59,11 @@ SlamSystem::~SlamSystem()
 
 vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timestamp, double exposure)
 {
+  if (!std::isfinite(timestamp)) {
+    std::ostringstream msg;
+    msg << where(__LINE__) << "timestamp " << timestamp << " s of frame " << m_nextFrameId << " is not finite";
+    throw vpHSlamException(vpHSlamException::invalidTimestamps, msg.str());
+  }
   if (m_frames.load() > 0 && !(timestamp > m_lastTimestamp)) {
     std::ostringstream msg;
     msg << where(__LINE__) << "timestamp " << timestamp << " s of frame " << m_nextFrameId

@@ -55,8 +55,8 @@ class SlamSystem;
   reveal a wrong initialisation (window residual too high, DSO's check) is discarded and initialised again.
 
   Initialisation: frames seen before the map exists are kept (raw) and, once it exists, tracked backwards from the
-  second keyframe, so the trajectory starts at the first frames rather than where initialisation succeeded. Nothing in this class exits or
-  crashes on bad input: wrong image sizes, empty images and misuse raise vpHSlamException.
+  second keyframe, so the trajectory starts at the first frames rather than where initialisation succeeded. Nothing in
+  this class exits or crashes on bad input: wrong image sizes, empty images and misuse raise vpHSlamException.
 
   Trajectory: every frame with a pose is stored RELATIVE to its reference keyframe, so when the window
   optimisation moves a keyframe, getTrajectory() moves the frames tracked against it too.
@@ -149,10 +149,12 @@ public:
     Process one image.
     \param I : grey image of the camera's input size (vpHSlamCamera::getWidth() x getHeight()).
     \param timestamp : seconds, strictly increasing.
-    \param exposure : exposure time (milliseconds, any consistent unit), <= 0 when unknown.
+    \param exposure : exposure time (milliseconds, any consistent unit), <= 0 when unknown; NaN and infinity are
+    taken as unknown too.
     \return the state for this frame.
     \exception vpHSlamException::invalidImage when I is empty or of the wrong size (both sizes are named);
-    vpHSlamException::invalidTimestamps when the timestamp does not increase.
+    vpHSlamException::invalidTimestamps when the timestamp is not finite or does not increase. A frame refused
+    this way leaves the system as it was: the next valid frame is tracked as if the refused one had not come.
   */
   State track(const vpImage<unsigned char> &I, double timestamp, double exposure = -1.);
 
