@@ -49,15 +49,15 @@ namespace
 //! and writes its files (nothing is written from the handler).
 volatile std::sig_atomic_t g_signal = 0;
 
-extern "C" void onTerminationSignal(int signal)
+extern "C" void onTerminationSignal(int number)
 {
   if (g_signal != 0) {
     // A second signal while the files are being written: the user insists, end at once (async-signal-safe calls).
-    std::signal(signal, SIG_DFL);
-    std::raise(signal);
+    std::signal(number, SIG_DFL);
+    std::raise(number);
     return;
   }
-  g_signal = signal;
+  g_signal = number;
 }
 
 //! The signals that stop a run the way Ctrl-C does.
@@ -610,8 +610,8 @@ int run(const Arguments &args)
               << " map segments with independent scales (see the .segN.txt files)" << std::endl;
   }
   const bool written = writeOutputs(args, slam, outcome);
-  if (signal != 0) {
-    return 128 + signal; // the shell convention for a program ended by a signal
+  if (g_signal != 0) {     // also a signal that came while the files were written
+    return 128 + g_signal; // the shell convention for a program ended by a signal
   }
   if (framesRead == 0 && error.empty()) {
     std::cerr << "error: no frame could be read from '" << args.input << "'" << std::endl;
