@@ -1,0 +1,194 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "loop/KeyframeDatabase.h"
+
+#include "features/OrbVocabulary.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <algorithm>
+#include <mutex>
+#include <string>
+
+namespace hslam
+{
+KeyframeDatabase::KeyframeDatabase(std::size_t wordCount, const KeyframeDatabaseOptions &options)
+    : m_options(options), m_index(wordCount)
+{
+  if (!(options.minCommonWordsRatio >= 0.0 && options.minCommonWordsRatio <= 1.0) ||
+      !(options.groupRetainRatio >= 0.0 && options.groupRetainRatio <= 1.0) || options.groupNeighbours < 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "keyframe database: ratios must lie in [0, 1] and the neighbour count be >= 0");
+  }
+}
+
+void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
+{
+  std::unique_lock<std::shared_mutex> lock(m_mutex);
+  if (m_vectors.count(id)) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "keyframe database: keyframe " + std::to_string(id) + " is already present");
+  }
+  for (const BowEntry &e : bow) {
+    if (e.wordId >= m_index.size()) {
+      throw vpHSlamException(vpHSlamException::invalidArgument,
+                             "keyframe database: word " + std::to_string(e.wordId) + " of keyframe " +
+                                 std::to_string(id) + " is outside the vocabulary (" + std::to_string(m_index.size()) +
+                                 " words): built with another vocabulary?");
+    }
+  }
+  for (const BowEntry &e : bow) {
+    m_index[e.wordId].push_back(id);
+  }
+  m_vectors.emplace(id, bow);
+}
+
+bool KeyframeDatabase::remove(KeyframeId id)
+{
+  std::unique_lock<std::shared_mutex> lock(m_mutex);
+  const auto it = m_vectors.find(id);
+  if (it == m_vectors.end()) {
+    return false;
+  }
+  for (const BowEntry &e : it->second) {
+    std::vector<KeyframeId> &holders = m_index[e.wordId];
+    holders.erase(std::remove(holders.begin(), holders.end(), id), holders.end());
+  }
+  m_vectors.erase(it);
+  return true;
+}
+
+void KeyframeDatabase::clear()
+{
+  std::unique_lock<std::shared_mutex> lock(m_mutex);
+  for (std::vector<KeyframeId> &holders : m_index) {
+    holders.clear();
+  }
+  m_vectors.clear();
+}
+
+std::size_t KeyframeDatabase::size() const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  return m_vectors.size();
+}
+
+bool KeyframeDatabase::contains(KeyframeId id) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  return m_vectors.count(id) > 0;
+}
+
+std::vector<double> KeyframeDatabase::scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  std::vector<double> scores;
+  for (KeyframeId id : ids) {
+    const auto it = m_vectors.find(id);
+    if (it != m_vectors.end()) {
+      scores.push_back(OrbVocabulary::score(bow, it->second));
+    }
+  }
+  return scores;
+}
+
+std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector &bow, const Query &query) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  // 1. Keyframes sharing words, with the count of shared words.
+  std::unordered_map<KeyframeId, int> common;
+  for (const BowEntry &e : bow) {
+    if (e.wordId >= m_index.size()) {
+      continue; // another vocabulary's word: shares nothing here
+    }
+    for (KeyframeId id : m_index[e.wordId]) {
+      ++common[id];
+    }
+  }
+  int maxCommon = 0;
+  for (auto it = common.begin(); it != common.end();) {
+    if (query.excluded && query.excluded(it->first)) {
+      it = common.erase(it);
+    } else {
+      maxCommon = std::max(maxCommon, it->second);
+      ++it;
+    }
+  }
+  if (common.empty()) {
+    return {};
+  }
+
+  // 2. Score the keyframes sharing enough words.
+  const double minCommon = m_options.minCommonWordsRatio * maxCommon;
+  std::unordered_map<KeyframeId, Candidate> scored;
+  for (const auto &kc : common) {
+    if (kc.second < minCommon) {
+      continue;
+    }
+    Candidate c;
+    c.id = kc.first;
+    c.commonWords = kc.second;
+    c.score = OrbVocabulary::score(bow, m_vectors.at(kc.first));
+    c.normalizedScore = query.expectedScore > 0.0 ? c.score / query.expectedScore : c.score;
+    c.groupScore = c.score;
+    if (c.score >= query.minScore && c.normalizedScore >= query.minNormalizedScore) {
+      scored.emplace(c.id, c);
+    }
+  }
+
+  // 3. Group by co-visibility: the group of a candidate is itself and its best neighbours that are candidates.
+  std::vector<Candidate> groups;
+  groups.reserve(scored.size());
+  for (const auto &entry : scored) {
+    Candidate best = entry.second;
+    double groupScore = entry.second.score;
+    if (query.covisible) {
+      const std::vector<KeyframeId> neighbours = query.covisible(entry.first);
+      const std::size_t count = std::min(neighbours.size(), static_cast<std::size_t>(m_options.groupNeighbours));
+      for (std::size_t i = 0; i < count; ++i) {
+        const auto it = scored.find(neighbours[i]);
+        if (it == scored.end() || it->first == entry.first) {
+          continue;
+        }
+        groupScore += it->second.score;
+        if (it->second.score > best.score || (it->second.score == best.score && it->first < best.id)) {
+          best = it->second;
+        }
+      }
+    }
+    best.groupScore = groupScore;
+    groups.push_back(best);
+  }
+
+  // 4. Keep the groups close to the best one; one entry per representative keyframe, best first.
+  double bestGroup = 0.0;
+  for (const Candidate &g : groups) {
+    bestGroup = std::max(bestGroup, g.groupScore);
+  }
+  const double retain = m_options.groupRetainRatio * bestGroup;
+  std::sort(groups.begin(), groups.end(), [](const Candidate &a, const Candidate &b) {
+    if (a.groupScore != b.groupScore) {
+      return a.groupScore > b.groupScore;
+    }
+    if (a.score != b.score) {
+      return a.score > b.score;
+    }
+    return a.id < b.id;
+  });
+  std::vector<Candidate> result;
+  for (const Candidate &g : groups) {
+    if (g.groupScore < retain) {
+      break;
+    }
+    const bool seen = std::any_of(result.begin(), result.end(), [&](const Candidate &r) { return r.id == g.id; });
+    if (!seen) {
+      result.push_back(g);
+      if (query.maxCandidates > 0 && result.size() >= query.maxCandidates) {
+        break;
+      }
+    }
+  }
+  return result;
+}
+} // namespace hslam

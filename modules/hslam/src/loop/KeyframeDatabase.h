@@ -1,0 +1,107 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file KeyframeDatabase.h
+  \brief Keyframe database for place recognition: BoW vectors of keyframes, an inverted index (word -> keyframes)
+  and queries that return scored, co-visibility-grouped candidates (paper section 3.4; ORB-SLAM2's
+  KeyFrameDatabase, whose rules and constants are the defaults here).
+
+  A query (relocalisation of a lost frame, loop detection for a new keyframe) runs in four steps:
+  1. keyframes sharing at least one word with the query are found through the inverted index, minus the ones the
+     caller excludes (for loops: keyframes connected to the query keyframe);
+  2. only those sharing at least minCommonWordsRatio times the largest number of shared words are scored (L1);
+     scores below Query::minScore, or below Query::minNormalizedScore once divided by Query::expectedScore, drop;
+  3. when the caller gives co-visibility, each candidate's group score is its score plus the scores of its best
+     co-visible neighbours that are candidates too, and the group is represented by its best-scoring member
+     (ORB-SLAM2: a place seen by several keyframes is more reliable than a single lucky one);
+  4. groups scoring at least groupRetainRatio times the best group are returned, best first.
+
+  The expected score normalises raw scores, which depend on the scene's texture, into "how much like its own
+  neighbourhood": the caller passes the score of the query with its best co-visible neighbour (scoresWith()
+  computes it from vectors stored here); DBoW2's loop detector does the same with the previous image.
+
+  Threading: every method may be called from any thread; queries share a lock, add/remove/clear take it
+  exclusively. The co-visibility and exclusion callbacks run under the shared lock and must not modify the database.
+*/
+#ifndef HSLAM_LOOP_KEYFRAME_DATABASE_H
+#define HSLAM_LOOP_KEYFRAME_DATABASE_H
+
+#include "features/BowVector.h"
+
+#include <visp3/core/vpConfig.h>
+
+#include <cstddef>
+#include <functional>
+#include <shared_mutex>
+#include <unordered_map>
+#include <vector>
+
+namespace hslam
+{
+//! Settings of KeyframeDatabase queries (defaults: ORB-SLAM2's KeyFrameDatabase).
+struct KeyframeDatabaseOptions {
+  double minCommonWordsRatio = 0.8; //!< score only keyframes sharing this fraction of the most words shared
+  double groupRetainRatio = 0.75;   //!< keep groups scoring at least this fraction of the best group
+  int groupNeighbours = 10;         //!< co-visible neighbours summed into a candidate's group score
+};
+
+class VISP_EXPORT KeyframeDatabase
+{
+public:
+  using KeyframeId = int;
+
+  //! One answer to a query.
+  struct Candidate {
+    KeyframeId id = -1;           //!< best-scoring keyframe of its group
+    double score = 0.0;           //!< L1 score of that keyframe with the query, in [0, 1]
+    double normalizedScore = 0.0; //!< score / expected score (= score when no expected score was given)
+    double groupScore = 0.0;      //!< sum of scores over the group (= score without co-visibility)
+    int commonWords = 0;          //!< words shared with the query
+  };
+
+  //! What to ask.
+  struct Query {
+    //! Keyframes never returned (for loops: the query's co-visible neighbours). Empty: none.
+    std::function<bool(KeyframeId)> excluded;
+    /*!
+      Best co-visible neighbours of a keyframe, best first (only the first KeyframeDatabaseOptions::groupNeighbours
+      are used). Empty: no grouping, every candidate is its own group.
+    */
+    std::function<std::vector<KeyframeId>(KeyframeId)> covisible;
+    double minScore = 0.0;           //!< raw L1 score floor (ORB-SLAM2 loops: lowest score with the neighbours)
+    double expectedScore = 0.0;      //!< > 0: normalise scores by it (score with the best co-visible neighbour)
+    double minNormalizedScore = 0.0; //!< floor on the normalised score
+    std::size_t maxCandidates = 0;   //!< 0: all that pass
+  };
+
+  explicit KeyframeDatabase(std::size_t wordCount, const KeyframeDatabaseOptions &options = KeyframeDatabaseOptions());
+
+  /*!
+    Add a keyframe's BoW vector.
+    \exception vpHSlamException::invalidArgument when the id is already present or a word id is out of the
+    vocabulary.
+  */
+  void add(KeyframeId id, const BowVector &bow);
+  //! Remove a keyframe (culled or reset). Returns false when it was not present.
+  bool remove(KeyframeId id);
+  void clear();
+  std::size_t size() const;
+  bool contains(KeyframeId id) const;
+  std::size_t wordCount() const { return m_index.size(); }
+
+  //! Candidates for \e bow, best first (see the class comment).
+  std::vector<Candidate> query(const BowVector &bow, const Query &query) const;
+
+  //! L1 scores of \e bow with each stored keyframe of \e ids (absent ids are skipped).
+  std::vector<double> scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const;
+
+private:
+  KeyframeDatabaseOptions m_options;
+  mutable std::shared_mutex m_mutex;
+  std::vector<std::vector<KeyframeId>> m_index; //!< keyframes holding each word
+  std::unordered_map<KeyframeId, BowVector> m_vectors;
+};
+} // namespace hslam
+
+#endif
