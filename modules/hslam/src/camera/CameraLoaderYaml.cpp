@@ -157,5 +157,11 @@ vpHSlamCamera vpHSlamCamera::loadEurocYaml(const std::string &path)
                            path + ": no camera_model field (neither an EuRoC sensor.yaml nor a Kalibr camchain)");
   } catch (const cv::Exception &e) {
     throw vpHSlamException(vpHSlamException::parseError, path + ": invalid YAML: " + e.msg);
+  } catch (const vpException &) {
+    throw; // ours, already naming the file
+  } catch (const std::exception &e) {
+    // OpenCV's YAML reader lets standard exceptions out on some malformed input (std::length_error; found by
+    // fuzz_camera_yaml).
+    throw vpHSlamException(vpHSlamException::parseError, path + ": invalid YAML (" + e.what() + ")");
   }
 }

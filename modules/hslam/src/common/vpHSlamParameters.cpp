@@ -460,6 +460,9 @@ void vpHSlamParameters::load(const std::string &path)
     storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);
   } catch (const cv::Exception &e) {
     throw vpHSlamException(vpHSlamException::parseError, where + "malformed YAML: " + e.err);
+  } catch (const std::exception &e) {
+    // OpenCV's YAML reader lets standard exceptions out on some malformed input (std::length_error).
+    throw vpHSlamException(vpHSlamException::parseError, where + "malformed YAML (" + e.what() + ")");
   }
   if (!storage.isOpened()) {
     throw vpHSlamException(vpHSlamException::fileUnreadable, where + "cannot be opened as YAML");

@@ -75,6 +75,11 @@ Eigen::Matrix4d readEurocSensorExtrinsics(const std::string &sensorYamlPath)
     }
   } catch (const cv::Exception &e) {
     throwAt(vpHSlamException::parseError, sensorYamlPath, 0, std::string("YAML parse error: ") + e.what());
+  } catch (const vpException &) {
+    throw; // ours, already naming the file
+  } catch (const std::exception &e) {
+    // OpenCV's YAML reader lets standard exceptions out on some malformed input (std::length_error).
+    throwAt(vpHSlamException::parseError, sensorYamlPath, 0, std::string("YAML parse error (") + e.what() + ")");
   }
   if (data.size() != static_cast<size_t>(kTransformSize * kTransformSize)) {
     throwAt(vpHSlamException::parseError, sensorYamlPath, 0,
