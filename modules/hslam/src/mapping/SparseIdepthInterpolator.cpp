@@ -27,8 +27,7 @@ int clampCell(double x, double cell, int n)
 
 SparseIdepthInterpolator::SparseIdepthInterpolator(const std::vector<IdepthSample> &samples, int width, int height,
                                                    int neighbours, double minRelativeSigma)
-    : m_samples(samples), m_width(width), m_height(height), m_neighbours(neighbours),
-      m_minRelativeSigma(minRelativeSigma)
+    : m_samples(samples), m_neighbours(neighbours), m_minRelativeSigma(minRelativeSigma)
 {
   if (samples.empty() || width <= 0 || height <= 0 || neighbours < 1 || neighbours > kMaxNeighbours ||
       minRelativeSigma < 0.) {

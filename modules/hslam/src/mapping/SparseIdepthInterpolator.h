@@ -64,7 +64,7 @@ public:
 
 private:
   std::vector<IdepthSample> m_samples;
-  int m_width, m_height, m_neighbours;
+  int m_neighbours;
   double m_minRelativeSigma;
   double m_cellSize;
   int m_cols, m_rows;

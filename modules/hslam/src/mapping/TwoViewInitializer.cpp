@@ -81,9 +81,11 @@ struct Hypothesis {
   Every (current, first) descriptor pair: best and second-best first-frame distance per current descriptor, best
   current descriptor per first-frame one. Compiled twice (function multi-versioning): with the POPCNT instruction
   and for the baseline x86-64 the build targets, where __builtin_popcountll is a libgcc call several times slower;
-  the loader picks the version the CPU supports.
+  the loader picks the version the CPU supports. Not under ThreadSanitizer: the loader runs the (instrumented)
+  version resolver while it relocates the library, before the TSan runtime is initialised, and the program crashes
+  before main().
 */
-#if defined(__GNUC__) && defined(__x86_64__) && defined(__linux__)
+#if defined(__GNUC__) && defined(__x86_64__) && defined(__linux__) && !defined(__SANITIZE_THREAD__)
 __attribute__((target_clones("popcnt", "default")))
 #endif
 void bruteForceHamming(const uint64_t *cur, int nCur, const uint64_t *first, int nFirst, int *bestFirstOfCur,
