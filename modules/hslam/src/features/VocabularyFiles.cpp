@@ -15,7 +15,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 
 namespace hslam
 {
@@ -42,8 +41,15 @@ std::string readWholeFile(const std::string &path)
   if (!in) {
     throwAt(vpHSlamException::fileUnreadable, path, 0, "cannot open the vocabulary file");
   }
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) {
+  // One read of the known size: several times faster than stream iterators on a 50 MB file.
+  std::string bytes;
+  const std::uintmax_t size = std::filesystem::file_size(path, ec);
+  if (!ec) {
+    bytes.resize(static_cast<std::size_t>(size));
+    in.read(&bytes[0], static_cast<std::streamsize>(size));
+    bytes.resize(static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.bad() || ec) {
     throwAt(vpHSlamException::fileUnreadable, path, 0, "read error");
   }
   if (bytes.empty()) {
@@ -400,7 +406,12 @@ OrbVocabulary loadVocabularyDbow2Yaml(const std::string &path)
     for (std::size_t w = 0; w < parts.wordNodes.size(); ++w) {
       parts.wordWeights[w] = nodeWeights[parts.wordNodes[w]];
     }
+  } catch (const vpHSlamException &) {
+    throw;
   } catch (const cv::Exception &e) {
+    throwAt(vpHSlamException::parseError, path, 0, std::string("not a valid YAML vocabulary: ") + e.what());
+  } catch (const std::exception &e) {
+    // OpenCV's parser also lets standard exceptions through on some malformed input.
     throwAt(vpHSlamException::parseError, path, 0, std::string("not a valid YAML vocabulary: ") + e.what());
   }
   OrbVocabulary vocabulary;

@@ -97,7 +97,8 @@ std::string vpHSlamVocabulary::defaultPath()
   if (isFile(installed)) {
     return installed;
   }
-  const std::string source = std::string(HSLAM_SOURCE_DATA_DIR) + "/" + kDefaultFileName;
+  const std::string source =
+      std::filesystem::path(std::string(HSLAM_SOURCE_DATA_DIR) + "/" + kDefaultFileName).lexically_normal().string();
   return isFile(source) ? source : std::string();
 }
 
