@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <iostream>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 namespace
@@ -166,9 +167,9 @@ private:
   void add(const vpImage<unsigned char> &I)
   {
     m_trainer.addImage(I);
-    if (m_trainer.getImageCount() % 50 == 0) {
-      std::cout << "\r  " << m_trainer.getImageCount() << " images, " << m_trainer.getDescriptorCount()
-                << " descriptors" << std::flush;
+    if (m_trainer.getImageCount() % 100 == 0) {
+      std::cout << "  " << m_trainer.getImageCount() << " images, " << m_trainer.getDescriptorCount() << " descriptors"
+                << std::endl;
     }
   }
 
@@ -254,15 +255,23 @@ int main(int argc, char **argv)
     for (const std::string &input : options.inputs) {
       collector.addPath(input);
     }
-    std::cout << "\r  " << trainer.getImageCount() << " images, " << trainer.getDescriptorCount() << " descriptors ("
+    std::cout << "  " << trainer.getImageCount() << " images, " << trainer.getDescriptorCount() << " descriptors ("
               << collector.skipped() << " unreadable images skipped)" << std::endl;
     const double t0 = vpTime::measureTimeMs();
-    const vpHSlamVocabulary vocabulary = trainer.train([](double fraction) {
+    // A bar redrawn in place on a terminal; one line per 10 % in logs and pipes.
+    const bool terminal = isatty(STDOUT_FILENO) != 0;
+    int lastTenth = -1;
+    const vpHSlamVocabulary vocabulary = trainer.train([&](double fraction) {
       const int width = 40;
       const int done = static_cast<int>(fraction * width + 0.5);
-      std::cout << "\r  k-means [" << std::string(static_cast<std::size_t>(done), '#')
-                << std::string(static_cast<std::size_t>(width - done), ' ') << "] "
-                << static_cast<int>(100 * fraction + 0.5) << " %" << std::flush;
+      const int percent = static_cast<int>(100 * fraction + 0.5);
+      if (!terminal && percent / 10 == lastTenth) {
+        return;
+      }
+      lastTenth = percent / 10;
+      std::cout << (terminal ? "\r" : "") << "  k-means [" << std::string(static_cast<std::size_t>(done), '#')
+                << std::string(static_cast<std::size_t>(width - done), ' ') << "] " << percent << " %"
+                << (terminal ? "" : "\n") << std::flush;
     });
     std::cout << "\n" << vocabulary.describe() << " (trained in " << (vpTime::measureTimeMs() - t0) / 1000. << " s)\n";
     vocabulary.save(options.output, format);
