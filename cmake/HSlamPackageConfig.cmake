@@ -8,3 +8,6 @@ configure_package_config_file("${CMAKE_CURRENT_LIST_DIR}/HSLAMConfig.cmake.in"
 write_basic_package_version_file("${CMAKE_BINARY_DIR}/HSLAMConfigVersion.cmake" COMPATIBILITY SameMinorVersion)
 install(FILES "${CMAKE_BINARY_DIR}/HSLAMConfig.cmake" "${CMAKE_BINARY_DIR}/HSLAMConfigVersion.cmake"
         DESTINATION "${HSLAM_CMAKE_INSTALL_DIR}")
+
+# The package's documentation (target `doc`).
+include("${CMAKE_CURRENT_LIST_DIR}/HSlamDoc.cmake")

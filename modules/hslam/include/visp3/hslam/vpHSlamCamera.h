@@ -104,13 +104,14 @@ public:
   static vpHSlamCamera loadKittiCalib(const std::string &path, unsigned int width, unsigned int height,
                                       const std::string &projection = "P0");
 
-  Model getModel() const { return m_model; }
+  Model getModel() const { return m_model; }          //!< geometric model of the input images
   unsigned int getWidth() const { return m_width; }   //!< input width, pixels
   unsigned int getHeight() const { return m_height; } //!< input height, pixels
   double getFx() const { return m_fx; }               //!< pixels
   double getFy() const { return m_fy; }               //!< pixels
   double getCx() const { return m_cx; }               //!< pixels
   double getCy() const { return m_cy; }               //!< pixels
+  //! Distortion coefficients in the order of the model (radtan: k1 k2 p1 p2 [k3]; equidistant: k1..k4; FOV: w).
   const std::vector<double> &getDistortion() const { return m_distortion; }
 
   //! Input intrinsics without distortion, as ViSP camera parameters.
@@ -124,9 +125,9 @@ public:
   */
   void setRectification(RectificationMode mode, unsigned int width = 0, unsigned int height = 0,
                         const vpCameraParameters &K = vpCameraParameters());
-  RectificationMode getRectificationMode() const { return m_rectMode; }
-  unsigned int getRectifiedWidth() const { return m_rectWidth; }   //!< pixels
-  unsigned int getRectifiedHeight() const { return m_rectHeight; } //!< pixels
+  RectificationMode getRectificationMode() const { return m_rectMode; } //!< see setRectification()
+  unsigned int getRectifiedWidth() const { return m_rectWidth; }        //!< pixels
+  unsigned int getRectifiedHeight() const { return m_rectHeight; }      //!< pixels
   //! Explicit target intrinsics (rectifyExplicit only).
   const vpCameraParameters &getExplicitRectifiedIntrinsics() const { return m_rectK; }
 

@@ -129,11 +129,11 @@ public:
     int maxTrackingFailures = 3;           //!< failed alignments in a row (pose predicted, DSO) before tracking is lost
   };
 
-  Features features;
-  Tracker tracker;
-  Mapper mapper;
-  Initializer initializer;
-  System system;
+  Features features;       //!< point selection
+  Tracker tracker;         //!< pose tracking
+  Mapper mapper;           //!< window optimisation and point management
+  Initializer initializer; //!< monocular initialisation
+  System system;           //!< system-wide behaviour
 
   /*!
     Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.

@@ -81,8 +81,8 @@ public:
   */
   void setVignette(const vpImage<float> &V);
 
-  bool hasResponse() const { return !m_G.empty(); }
-  bool hasVignette() const { return m_invV.getSize() > 0; }
+  bool hasResponse() const { return !m_G.empty(); }         //!< an inverse response G^-1 is known
+  bool hasVignette() const { return m_invV.getSize() > 0; } //!< a vignette V is known
   //! True when neither response nor vignette is known (affine brightness will be estimated instead).
   bool isEmpty() const { return !hasResponse() && !hasVignette(); }
 

@@ -63,10 +63,10 @@ public:
     seeing 90 degrees or more, crop of an image whose principal point is outside it).
   */
   explicit vpHSlamRectifier(const vpHSlamCamera &camera);
-  vpHSlamRectifier(const vpHSlamRectifier &other);
-  vpHSlamRectifier(vpHSlamRectifier &&other) noexcept;
-  vpHSlamRectifier &operator=(const vpHSlamRectifier &other);
-  vpHSlamRectifier &operator=(vpHSlamRectifier &&other) noexcept;
+  vpHSlamRectifier(const vpHSlamRectifier &other);                //!< copies the remap tables
+  vpHSlamRectifier(vpHSlamRectifier &&other) noexcept;            //!< takes the remap tables
+  vpHSlamRectifier &operator=(const vpHSlamRectifier &other);     //!< copies the remap tables
+  vpHSlamRectifier &operator=(vpHSlamRectifier &&other) noexcept; //!< takes the remap tables
   ~vpHSlamRectifier();
 
   /*!

@@ -106,7 +106,7 @@ public:
   unsigned int getHeight() const { return m_height; }     //!< pixels
   unsigned int getFrameCount() const { return m_frames; } //!< frames
   double getFrameRate() const { return m_fps; }           //!< frames per second
-  const Effects &getEffects() const { return m_effects; }
+  const Effects &getEffects() const { return m_effects; } //!< effects in use
 
   //! Pinhole intrinsics of the rendered images (no distortion; (0,0) is the centre of the top-left pixel).
   vpCameraParameters getCameraParameters() const;

@@ -130,6 +130,10 @@ public:
     Draw a top view: ground truth and estimate projected on the two dominant directions of the ground-truth
     positions (principal axes), a metric grid with its spacing written, a legend and an optional caption line.
     \param I : resized to \e width x \e height.
+    \param groundTruth : reference trajectory (green).
+    \param estimate : estimate already in the ground-truth frame, e.g. getAlignedEstimate() (red).
+    \param caption : optional line written at the bottom.
+    \param width, height : picture size, pixels.
   */
   static void drawTopView(vpImage<vpRGBa> &I, const vpHSlamTrajectory &groundTruth, const vpHSlamTrajectory &estimate,
                           const std::string &caption = "", unsigned int width = 900, unsigned int height = 900);

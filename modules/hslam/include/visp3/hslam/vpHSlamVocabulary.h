@@ -59,10 +59,10 @@ public:
   //! An empty vocabulary (empty() is true).
   vpHSlamVocabulary();
   ~vpHSlamVocabulary();
-  vpHSlamVocabulary(const vpHSlamVocabulary &other);
-  vpHSlamVocabulary &operator=(const vpHSlamVocabulary &other);
-  vpHSlamVocabulary(vpHSlamVocabulary &&other) noexcept;
-  vpHSlamVocabulary &operator=(vpHSlamVocabulary &&other) noexcept;
+  vpHSlamVocabulary(const vpHSlamVocabulary &other);                //!< deep copy
+  vpHSlamVocabulary &operator=(const vpHSlamVocabulary &other);     //!< deep copy
+  vpHSlamVocabulary(vpHSlamVocabulary &&other) noexcept;            //!< leaves \e other empty
+  vpHSlamVocabulary &operator=(vpHSlamVocabulary &&other) noexcept; //!< swaps with \e other
 
   /*!
     Read a vocabulary file.
@@ -85,7 +85,7 @@ public:
   //! Parse "auto", "binary", "text", "yaml". \exception vpHSlamException::invalidArgument otherwise.
   static FileFormat parseFormat(const std::string &name);
 
-  bool empty() const;
+  bool empty() const;                   //!< true until loaded or trained
   unsigned int getBranching() const;    //!< k
   unsigned int getLevels() const;       //!< L
   std::size_t getWordCount() const;     //!< leaves

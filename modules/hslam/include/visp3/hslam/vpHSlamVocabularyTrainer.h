@@ -53,7 +53,11 @@ public:
     unsigned int maxKmeansIterations = 30; //!< Lloyd iterations per node at most
   };
 
-  vpHSlamVocabularyTrainer();
+  vpHSlamVocabularyTrainer(); //!< default Options
+  /*!
+    \param options : see Options.
+    \exception vpHSlamException::invalidArgument when featuresPerImage is 0.
+  */
   explicit vpHSlamVocabularyTrainer(const Options &options);
   ~vpHSlamVocabularyTrainer();
 
@@ -63,8 +67,8 @@ public:
     \exception vpHSlamException::invalidImage when I is empty.
   */
   unsigned int addImage(const vpImage<unsigned char> &I);
-  std::size_t getImageCount() const;
-  std::size_t getDescriptorCount() const;
+  std::size_t getImageCount() const;      //!< images added so far
+  std::size_t getDescriptorCount() const; //!< descriptors kept so far
 
   /*!
     Build the vocabulary from everything added so far.
