@@ -11,15 +11,16 @@
 //!   ./tutorial-hslam-evaluate --groundtruth ../shared/data/tsukuba_cg_000-149/groundtruth.txt --estimate tsukuba.txt
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
-#include <visp3/core/vpMeterPixelConversion.h>
 #include <visp3/core/vpTime.h>
 #include <visp3/gui/vpDisplayX.h>
 #include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
+#include <visp3/hslam/vpHSlamLiveView.h>
 #include <visp3/hslam/vpHSlamLog.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 #include <visp3/hslam/vpHSlamRectifier.h>
+#include <visp3/io/vpImageIo.h>
 
 #include <algorithm>
 #include <cmath>
@@ -102,6 +103,7 @@ struct Arguments {
   std::string saveConfig;
   std::string logLevel = "warning";
   bool display = true;
+  std::string screenshot; //!< PNG of the last view drawn (needs a display)
   bool quiet = false;
   bool skipUnreadable = false; //!< count undecodable frames as dropped and carry on (default: stop with the error)
   bool help = false;
@@ -114,7 +116,7 @@ void printUsage(const char *program, std::ostream &out)
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--fps HZ] [--mode vo-strict]\n"
          "       [--deterministic] [--speed X] [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt]\n"
          "       [--keyframes OUT.txt] [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet]\n"
-         "       [--no-display] [--help]\n\n"
+         "       [--no-display] [--screenshot FILE.png] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
          "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
@@ -150,6 +152,7 @@ void printUsage(const char *program, std::ostream &out)
          "  --log-level LEVEL  library messages on stderr: error, warning (default), info, debug\n"
          "  --quiet            no progress line\n"
          "  --no-display       do not open a window (also when no X display is available)\n"
+         "  --screenshot FILE  with a window: save the last view shown as a PNG at the end\n"
          "  --help             this text\n";
 }
 
@@ -233,6 +236,8 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.quiet = true;
     } else if (option == "--no-display") {
       args.display = false;
+    } else if (option == "--screenshot") {
+      args.screenshot = value();
     } else if (option == "--skip-unreadable") {
       args.skipUnreadable = true;
     } else {
@@ -264,54 +269,6 @@ vpHSlamParameters makeParameters(const Arguments &args)
   }
   params.validate();
   return params;
-}
-
-//! Jet colour map on [0, 1]: near (0) red, far (1) blue.
-vpColor depthColor(double x)
-{
-  x = std::min(1., std::max(0., x));
-  const double r = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 1.)));
-  const double g = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 2.)));
-  const double b = std::min(1., std::max(0., 1.5 - std::abs(4. * x - 3.)));
-  return vpColor(static_cast<unsigned char>(255. * r), static_cast<unsigned char>(255. * g),
-                 static_cast<unsigned char>(255. * b));
-}
-
-//! Rectified image with the active points projected by the current pose, coloured by depth.
-void drawPoints(const vpHSlam &slam, vpImage<unsigned char> &I)
-{
-  const std::vector<vpColVector> points = slam.getActivePoints();
-  const vpHomogeneousMatrix cMw = slam.get_cMw();
-  const vpCameraParameters K = slam.getCameraParameters();
-  std::vector<double> depths;
-  std::vector<vpImagePoint> pixels;
-  for (const vpColVector &wX : points) {
-    const double x = cMw[0][0] * wX[0] + cMw[0][1] * wX[1] + cMw[0][2] * wX[2] + cMw[0][3];
-    const double y = cMw[1][0] * wX[0] + cMw[1][1] * wX[1] + cMw[1][2] * wX[2] + cMw[1][3];
-    const double z = cMw[2][0] * wX[0] + cMw[2][1] * wX[1] + cMw[2][2] * wX[2] + cMw[2][3];
-    if (z <= 0.) {
-      continue;
-    }
-    vpImagePoint ip;
-    vpMeterPixelConversion::convertPoint(K, x / z, y / z, ip);
-    if (ip.get_u() < 0 || ip.get_v() < 0 || ip.get_u() >= I.getWidth() || ip.get_v() >= I.getHeight()) {
-      continue;
-    }
-    pixels.push_back(ip);
-    depths.push_back(z);
-  }
-  if (depths.empty()) {
-    return;
-  }
-  // Colour scale from the 5th to the 95th percentile of the visible depths (robust to a few far points).
-  std::vector<double> sorted = depths;
-  std::sort(sorted.begin(), sorted.end());
-  const double lo = sorted[sorted.size() / 20];
-  const double hi = sorted[sorted.size() - 1 - sorted.size() / 20];
-  const double range = std::max(hi - lo, 1e-9);
-  for (size_t k = 0; k < pixels.size(); ++k) {
-    vpDisplay::displayPoint(I, pixels[k], depthColor((depths[k] - lo) / range), 2);
-  }
 }
 
 std::string jsonNumber(double x)
@@ -485,12 +442,16 @@ int run(const Arguments &args)
     display = false;
   }
   vpDisplayX window;
+  bool windowOpen = false;
+  vpHSlamLiveView view;
+  vpImage<vpRGBa> canvas;
+  double fps = 0., lastDrawMs = 0.;
 #else
   display = false;
 #endif
 
   const int frameCount = source->getFrameCount();
-  vpImage<unsigned char> I, Irect;
+  vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
   double firstTimestamp = 0., lastTimestamp = 0.;
   unsigned int framesRead = 0;
@@ -547,10 +508,19 @@ int run(const Arguments &args)
       }
 #if defined(VISP_HAVE_X11)
       if (display) {
-        slam.getRectifiedImage(Irect);
-        if (framesRead == 1) {
+        // Live view: image with the active points by inverse depth, status, top view; space pauses, q or
+        // Escape (or a click) quits.
+        const double now = vpTime::measureTimeMs();
+        if (lastDrawMs > 0. && now > lastDrawMs) {
+          const double instantFps = 1000. / (now - lastDrawMs);
+          fps = fps > 0. ? 0.9 * fps + 0.1 * instantFps : instantFps;
+        }
+        lastDrawMs = now;
+        view.draw(slam, frame.index, fps, canvas, "space: pause  q: quit");
+        if (!windowOpen) {
           try {
-            window.init(Irect, 0, 0, "H-SLAM: active points coloured by depth (near red, far blue)");
+            window.init(canvas, 0, 0, "H-SLAM");
+            windowOpen = true;
           } catch (const vpException &e) {
             std::cerr << "warning: cannot open a window (" << e.getStringMessage() << "): running without display"
                       << std::endl;
@@ -558,15 +528,26 @@ int run(const Arguments &args)
             continue;
           }
         }
-        vpDisplay::display(Irect);
-        if (state == vpHSlam::stateTracking) {
-          drawPoints(slam, Irect);
+        vpDisplay::display(canvas);
+        vpDisplay::flush(canvas);
+        bool quit = vpDisplay::getClick(canvas, false);
+        std::string key;
+        bool paused = false;
+        while (!quit && g_signal == 0) {
+          if (vpDisplay::getKeyboardEvent(canvas, key, false)) {
+            if (key == "q" || key == "Q" || key == "\x1b" || key == "Escape") {
+              quit = true;
+            } else if (key == " " || key == "space" || key == "p") {
+              paused = !paused;
+            }
+          }
+          quit = quit || vpDisplay::getClick(canvas, false);
+          if (!paused) {
+            break;
+          }
+          vpTime::wait(20.);
         }
-        std::ostringstream text;
-        text << "frame " << frame.index << "  " << vpHSlam::stateName(state) << "  (click to stop)";
-        vpDisplay::displayText(Irect, 15, 10, text.str(), vpColor::red);
-        vpDisplay::flush(Irect);
-        if (vpDisplay::getClick(Irect, false)) {
+        if (quit) {
           break;
         }
       }
@@ -578,6 +559,19 @@ int run(const Arguments &args)
     error = e.what();
   }
   slam.synchronize();
+#if defined(VISP_HAVE_X11)
+  if (windowOpen && !args.screenshot.empty()) {
+    try {
+      vpImage<vpRGBa> shot;
+      vpDisplay::getImage(canvas, shot);
+      vpImageIo::write(shot, args.screenshot);
+      std::cout << "screenshot: " << args.screenshot << std::endl;
+    } catch (const vpException &e) {
+      std::cerr << "warning: cannot save the screenshot '" << args.screenshot << "': " << e.getStringMessage()
+                << std::endl;
+    }
+  }
+#endif
   const int signal = g_signal; // read once: a signal arriving from now on only ends the program if repeated
   outcome.signal = signal;
   outcome.wallS = (vpTime::measureTimeMs() - t0) / 1000.;
