@@ -167,6 +167,22 @@ OrbVocabulary::Parts OrbVocabulary::parts() const
   return p;
 }
 
+std::uint32_t OrbVocabulary::closestChild(const OrbDescriptor &d, std::uint32_t node) const
+{
+  const std::uint32_t begin = m_childBegin[node], end = m_childBegin[node + 1];
+  const OrbDescriptor *centroids = m_childDescriptors.data() + 1;
+  std::uint32_t best = begin;
+  int bestDistance = hammingDistance(d, centroids[begin]);
+  for (std::uint32_t c = begin + 1; c < end; ++c) {
+    const int distance = hammingDistance(d, centroids[c]);
+    if (distance < bestDistance) { // ties keep the first child, as DBoW2
+      bestDistance = distance;
+      best = c;
+    }
+  }
+  return m_children[best];
+}
+
 std::uint32_t OrbVocabulary::wordOf(const OrbDescriptor &d, int indexDepth, std::uint32_t *indexNode) const
 {
   std::uint32_t node = 0;
@@ -175,18 +191,7 @@ std::uint32_t OrbVocabulary::wordOf(const OrbDescriptor &d, int indexDepth, std:
     *indexNode = 0;
   }
   while (m_childBegin[node] != m_childBegin[node + 1]) {
-    const std::uint32_t begin = m_childBegin[node], end = m_childBegin[node + 1];
-    const OrbDescriptor *centroids = m_childDescriptors.data() + 1;
-    std::uint32_t best = begin;
-    int bestDistance = hammingDistance(d, centroids[begin]);
-    for (std::uint32_t c = begin + 1; c < end; ++c) {
-      const int distance = hammingDistance(d, centroids[c]);
-      if (distance < bestDistance) {
-        bestDistance = distance;
-        best = c;
-      }
-    }
-    node = m_children[best];
+    node = closestChild(d, node);
     ++depth;
     if (indexNode && depth <= indexDepth) {
       *indexNode = node;
@@ -234,22 +239,10 @@ void OrbVocabulary::transformInto(const std::vector<OrbDescriptor> &descriptors,
           __builtin_prefetch(block + offset);
         }
       }
-      const std::uint32_t node = current[i];
-      const std::uint32_t begin = m_childBegin[node], end = m_childBegin[node + 1];
-      if (begin == end) {
+      if (m_childBegin[current[i]] == m_childBegin[current[i] + 1]) {
         continue; // reached a leaf already
       }
-      const OrbDescriptor &d = descriptors[i];
-      std::uint32_t best = begin;
-      int bestDistance = hammingDistance(d, centroids[begin]);
-      for (std::uint32_t c = begin + 1; c < end; ++c) {
-        const int distance = hammingDistance(d, centroids[c]);
-        if (distance < bestDistance) {
-          bestDistance = distance;
-          best = c;
-        }
-      }
-      current[i] = m_children[best];
+      current[i] = closestChild(descriptors[i], current[i]);
       if (direct && depth <= indexDepth) {
         indexNodes[i] = current[i];
       }

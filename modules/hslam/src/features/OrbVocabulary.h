@@ -119,6 +119,8 @@ public:
   std::uint64_t fingerprint() const { return m_fingerprint; }
 
 private:
+  //! The child of an inner node whose centroid is closest to \e d (Hamming).
+  std::uint32_t closestChild(const OrbDescriptor &d, std::uint32_t node) const;
   void transformInto(const std::vector<OrbDescriptor> &descriptors, BowVector &bow, FeatureVector *direct,
                      int indexDepth) const;
 
