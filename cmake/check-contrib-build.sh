@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Check that modules/hslam configures and builds UNCHANGED inside a ViSP 3.5 source build, as a contrib module:
 #   cmake <visp-src> -DVISP_CONTRIB_MODULES_PATH=<repo>/modules
-# then builds visp_hslam and the module's own test (run with ViSP's "-c -d" options) and runs it with ctest.
+# then builds visp_hslam and the module's own test (run with ViSP's "-c -d" options) and runs it with ctest, and
+# builds test/package/consumer against that ViSP build with find_package(VISP REQUIRED COMPONENTS visp_hslam).
 #
 #   bash cmake/check-contrib-build.sh [WORK_DIR]      (default WORK_DIR: /tmp/hslam-contrib-check)
 #
@@ -48,4 +49,13 @@ grep -q "visp_hslam" "$work/build/VISPModules.cmake" 2>/dev/null || grep -q "vis
 }
 cmake --build "$work/build" -j "$jobs" --target visp_hslam testHSlamModule
 (cd "$work/build" && ctest -R testHSlamModule --output-on-failure)
+# A user's project against this ViSP build: find_package(VISP REQUIRED COMPONENTS visp_hslam).
+cmake --build "$work/build" -j "$jobs" --target visp_io visp_sensor
+cmake -S "$repo/test/package/consumer" -B "$work/consumer" -DCMAKE_BUILD_TYPE=Release -DHSLAM_CONSUMER_CONTRIB=ON \
+  -DVISP_DIR="$work/build" >"$work/consumer-configure.log" || { cat "$work/consumer-configure.log"; exit 1; }
+cmake --build "$work/consumer" -j "$jobs"
+data="$repo/../shared/data/kitti06_000-050"
+if [ -d "$data" ]; then
+  "$work/consumer/first-pose" "$data" 20 | tail -1
+fi
 echo "contrib-mode check passed: visp_hslam built inside ViSP $(basename "$src") from $repo/modules"
