@@ -11,7 +11,8 @@
 #include <visp3/hslam/vpHSlamVocabulary.h>
 #include <visp3/hslam/vpHSlamVocabularyTrainer.h>
 #include <visp3/io/vpImageIo.h>
-#include <visp3/io/vpVideoReader.h>
+
+#include <opencv2/videoio.hpp>
 
 #include <algorithm>
 #include <cstdlib>
@@ -213,17 +214,22 @@ private:
 
   void addVideo(const std::string &path)
   {
-    vpVideoReader reader;
-    reader.setFileName(path);
+    // OpenCV's reader directly: it reports the end of the stream, where ViSP 3.5's vpVideoReader keeps returning
+    // the last decoded image when a container does not store its frame count.
+    cv::VideoCapture capture(path);
+    if (!capture.isOpened()) {
+      throw vpHSlamException(vpHSlamException::fileUnreadable, path + ": cannot open the video");
+    }
+    cv::Mat frame;
     vpImage<unsigned char> I;
-    reader.open(I);
     unsigned int index = 0;
-    while (!reader.end()) {
-      reader.acquire(I);
-      if (index++ % m_step == 0 && I.getSize() > 0) {
+    while (capture.read(frame) && !frame.empty()) {
+      if (index++ % m_step == 0) {
+        vpImageConvert::convert(frame, I);
         add(I);
       }
     }
+    std::cout << path << ": " << index << " video frames" << std::endl;
   }
 
   vpHSlamVocabularyTrainer &m_trainer;

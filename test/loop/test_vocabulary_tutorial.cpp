@@ -87,6 +87,21 @@ TEST_F(VocabularyTutorial, TrainsOnADatasetFolderWithAStep)
   EXPECT_FALSE(vpHSlamVocabulary::load(m_dir + "/k.hvoc").empty());
 }
 
+TEST_F(VocabularyTutorial, TrainsOnAVideoUntilItsEnd)
+{
+  const std::string images = hslam_test::vispImagesDir();
+  if (images.empty()) {
+    GTEST_SKIP() << "visp-images-data not installed";
+  }
+  // cube.mpeg does not store its frame count: the program must stop at the end of the stream by itself.
+  const hslam_test::ProgramRun run = hslam_test::runProgram(
+      "timeout 120 " + m_program,
+      "--images " + images + "/video/cube.mpeg --step 5 --branching 5 --levels 3 --output " + m_dir + "/v.hvoc");
+  ASSERT_EQ(run.exitCode, 0) << run.output;
+  EXPECT_NE(run.output.find("video frames"), std::string::npos) << run.output;
+  EXPECT_FALSE(vpHSlamVocabulary::load(m_dir + "/v.hvoc").empty());
+}
+
 TEST_F(VocabularyTutorial, ClearErrors)
 {
   hslam_test::ProgramRun run = hslam_test::runProgram(m_program, "--images " + m_dir + "/nothing --output x.hvoc");
