@@ -6,7 +6,10 @@
 #include "io/SourceFiles.h"
 #include "io/TumRgbdSource.h"
 
+#include <visp3/core/vpImageConvert.h>
 #include <visp3/hslam/vpHSlamException.h>
+
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -33,28 +36,29 @@ VideoSource::VideoSource(const std::string &path, const vpHSlamImageSource::Opti
   m_frameRate = options.frameRate;
   m_maxFrames = options.maxFrames;
 
+  // OpenCV's reader, not vpVideoReader: ViSP 3.5's reader keeps returning the last decoded image when a container
+  // does not store its frame count (e.g. an MPEG-1 stream), which would feed the same frame forever.
   try {
-    m_reader.setFileName(path);
-    if (!m_reader.isVideoFormat()) {
-      throw vpHSlamException(vpHSlamException::unsupported, "'" + path + "' is not a video format vpVideoReader reads");
-    }
-    m_reader.open(m_first);
-  } catch (const vpHSlamException &) {
-    throw;
-  } catch (const vpException &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           "cannot open video '" + path + "': " + e.getStringMessage());
+    // FFmpeg only: OpenCV's other backends (GStreamer, image sequences) print to stderr on files they cannot
+    // play, and library code stays silent.
+    m_capture.open(path, cv::CAP_FFMPEG);
+  } catch (const cv::Exception &e) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot open video '" + path + "': " + e.what());
   }
-  if (m_first.getSize() == 0) {
+  if (!m_capture.isOpened()) {
+    throw vpHSlamException(vpHSlamException::fileUnreadable,
+                           "cannot open video '" + path + "': not a video this build of OpenCV can decode");
+  }
+  if (!readFrame(m_first)) {
     throw vpHSlamException(vpHSlamException::fileUnreadable, "video '" + path + "' has no decodable frame");
   }
-  // open() decoded the first frame for its size and rewound: acquire() delivers it again.
+  m_firstPending = true; // read for its size: acquire() delivers it first
   // The first frame gives the size to calibration formats that do not store it (KITTI calib.txt).
   m_camera = vpHSlamCamera::load(m_cameraFile, m_first.getWidth(), m_first.getHeight());
-  const long last = m_reader.getLastFrameIndex();
-  const long first = m_reader.getFirstFrameIndex();
-  if (last >= first && last > 0) {
-    long count = last - first + 1 - static_cast<long>(options.startFrame);
+  // The container's frame count is a hint only (some formats estimate it); -1 when it has none.
+  const double stored = m_capture.get(cv::CAP_PROP_FRAME_COUNT);
+  if (stored >= 2. && stored < 1e9) { // MPEG-1 streams report 1
+    long count = static_cast<long>(stored) - static_cast<long>(options.startFrame);
     if (options.maxFrames > 0) {
       count = std::min<long>(count, options.maxFrames);
     }
@@ -70,26 +74,43 @@ VideoSource::VideoSource(const std::string &path, const vpHSlamImageSource::Opti
   }
 }
 
+bool VideoSource::readFrame(vpImage<unsigned char> &I)
+{
+  cv::Mat frame;
+  if (!m_capture.read(frame) || frame.empty()) {
+    return false;
+  }
+  if (frame.channels() == 1) {
+    vpImageConvert::convert(frame, I);
+  } else {
+    cv::Mat grey;
+    cv::cvtColor(frame, grey, frame.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
+    vpImageConvert::convert(grey, I);
+  }
+  return true;
+}
+
 bool VideoSource::decodeNext(vpImage<unsigned char> &I)
 {
   if (m_ended) {
     return false;
   }
-  if (m_reader.end()) {
-    m_ended = true;
-    return false;
-  }
-  try {
-    m_reader.acquire(I);
-  } catch (const vpException &e) {
-    const std::string message =
-        "video '" + m_path + "', frame " + std::to_string(m_fileIndex) + ": " + e.getStringMessage();
-    ++m_fileIndex; // consumed: the next frame keeps its own index and timestamp
-    throw vpHSlamException(vpHSlamException::fileUnreadable, message);
-  }
-  if (I.getSize() == 0) {
-    m_ended = true;
-    return false;
+  if (m_firstPending) {
+    m_firstPending = false;
+    I = m_first;
+  } else {
+    bool decoded = false;
+    try {
+      decoded = readFrame(I);
+    } catch (const cv::Exception &e) {
+      const std::string message = "video '" + m_path + "', frame " + std::to_string(m_fileIndex) + ": " + e.what();
+      ++m_fileIndex; // consumed: the next frame keeps its own index and timestamp
+      throw vpHSlamException(vpHSlamException::fileUnreadable, message);
+    }
+    if (!decoded) {
+      m_ended = true;
+      return false;
+    }
   }
   if (I.getWidth() != m_camera.getWidth() || I.getHeight() != m_camera.getHeight()) {
     throw vpHSlamException(vpHSlamException::invalidImage,

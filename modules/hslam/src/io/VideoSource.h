@@ -6,7 +6,8 @@
 #define HSLAM_IO_VIDEO_SOURCE_H
 
 #include <visp3/hslam/vpHSlamImageSource.h>
-#include <visp3/io/vpVideoReader.h>
+
+#include <opencv2/videoio.hpp>
 
 #include <string>
 
@@ -34,12 +35,15 @@ public:
 private:
   //! Next decoded frame of the file, size-checked; false at the end of the stream.
   bool decodeNext(vpImage<unsigned char> &I);
+  //! Next frame of the stream in grey; false at its end.
+  bool readFrame(vpImage<unsigned char> &I);
 
   std::string m_path, m_cameraFile;
-  vpVideoReader m_reader;
+  cv::VideoCapture m_capture;
   vpHSlamCamera m_camera;
   vpHSlamPhotometricCalibration m_photometric;
-  vpImage<unsigned char> m_first; //!< frame decoded by open() (for the size only)
+  vpImage<unsigned char> m_first; //!< first frame, read for the size and delivered first
+  bool m_firstPending = false;
   bool m_ended = false;
   int m_frameCount = -1;
   unsigned int m_maxFrames = 0;
