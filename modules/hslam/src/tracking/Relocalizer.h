@@ -1,0 +1,78 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file Relocalizer.h
+  \brief Relocalisation of a lost frame against the keyframes place recognition proposes (paper section 3.2,
+  failure recovery; ORB-SLAM2's Tracking::Relocalization).
+
+  For each candidate keyframe, best first: ORB matches between the keyframe's map points and the frame's keypoints,
+  searched only among features under the same vocabulary node (the direct index: SearchByBoW); when enough match, a
+  PnP RANSAC (OpenCV's solvePnPRansac, EPnP hypotheses) gives a pose and its inliers, which the robust pose-only
+  optimisation refines and re-classifies. The first candidate that keeps enough inliers wins. The system then
+  refines that pose photometrically against the keyframe before tracking resumes in the same map.
+
+  Threading: free function, no state; reads its inputs only.
+*/
+#ifndef HSLAM_TRACKING_RELOCALIZER_H
+#define HSLAM_TRACKING_RELOCALIZER_H
+
+#include "features/BinaryDescriptor.h"
+#include "features/BowVector.h"
+#include "tracking/PoseOnlyOptimizer.h"
+
+#include <visp3/core/vpConfig.h>
+
+#include <vector>
+
+namespace hslam
+{
+//! What relocalisation needs of a keyframe: its map points with their descriptors and direct index.
+struct RelocalizationKeyframe {
+  int id = -1;
+  std::vector<Eigen::Vector3d> wX;        //!< map points, world coordinates
+  std::vector<OrbDescriptor> descriptors; //!< one per point
+  FeatureVector direct;                   //!< direct index of \e descriptors (OrbVocabulary::transform)
+};
+
+//! The lost frame: keypoints with descriptors and their direct index.
+struct RelocalizationFrame {
+  std::vector<Eigen::Vector2d> uv;        //!< keypoint pixels
+  std::vector<OrbDescriptor> descriptors; //!< one per keypoint
+  FeatureVector direct;                   //!< with the same levelsUp as the keyframes'
+};
+
+//! Settings (defaults: ORB-SLAM2's relocalisation).
+struct RelocalizerOptions {
+  int maxDistance = 50;           //!< Hamming distance accepted at most in the BoW search (ORB-SLAM2 TH_LOW)
+  float ratio = 0.75f;            //!< best below ratio x second best (ORB-SLAM2: 0.75 in relocalisation)
+  int minMatches = 15;            //!< BoW matches needed to try PnP with a keyframe
+  int ransacIterations = 300;     //!< PnP RANSAC iterations
+  double ransacThresholdPx = 2.5; //!< PnP inlier threshold, pixels (sqrt(5.991) at level 0)
+  double ransacConfidence = 0.99; //!< PnP RANSAC confidence
+  int minInliers = 50;            //!< inliers after refinement to accept (ORB-SLAM2: 50)
+  PoseOnlyOptions refinement;     //!< pose-only refinement of the PnP pose
+};
+
+//! Outcome of relocalize().
+struct RelocalizationResult {
+  bool success = false;
+  int keyframeId = -1; //!< the keyframe the frame was relocalised against
+  SE3d cTw;            //!< pose of the frame
+  int matches = 0;     //!< BoW matches with that keyframe
+  int inliers = 0;     //!< after refinement
+  int candidatesTried = 0;
+};
+
+//! BoW-restricted matching (ORB-SLAM2 SearchByBoW): pairs (keyframe point, frame keypoint).
+VISP_EXPORT std::vector<std::pair<int, int>>
+matchByBow(const RelocalizationKeyframe &keyframe, const RelocalizationFrame &frame, const RelocalizerOptions &options);
+
+//! Try the candidates in order (see the file comment).
+VISP_EXPORT RelocalizationResult relocalize(const RelocalizationFrame &frame,
+                                            const std::vector<const RelocalizationKeyframe *> &candidates,
+                                            const PinholeIntrinsics &K,
+                                            const RelocalizerOptions &options = RelocalizerOptions());
+} // namespace hslam
+
+#endif

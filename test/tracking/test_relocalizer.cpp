@@ -1,0 +1,149 @@
+// Relocalisation on an exact synthetic scene: three places, a lost frame near one of them; the keyframe database
+// proposes that place first, BoW matching + PnP RANSAC + pose-only refinement recover the pose. A frame of pure
+// distractors is not relocalised.
+#include "features/OrbVocabulary.h"
+#include "features/VocabularyTrainer.h"
+#include "loop/KeyframeDatabase.h"
+#include "tracking/Relocalizer.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace
+{
+using hslam::OrbDescriptor;
+using hslam::SE3d;
+
+const hslam::PinholeIntrinsics kK{500., 500., 319.5, 239.5};
+
+OrbDescriptor randomDescriptor(std::mt19937_64 &rng)
+{
+  OrbDescriptor d;
+  for (auto &w : d.words) {
+    w = rng();
+  }
+  return d;
+}
+
+SE3d lookingFrom(const Eigen::Vector3d &rotationVector, const Eigen::Vector3d &cameraCentre)
+{
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << Eigen::Vector3d::Zero(), rotationVector;
+  const SE3d wRc = SE3d::exp(xi);
+  return SE3d(wRc.unitQuaternion(), cameraCentre).inverse(); // cTw
+}
+
+class Relocalization : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> spread(-2., 2.), depth(4., 7.);
+    // Place j: 300 points around (10 j, 0, 5.5), seen by keyframe j from (10 j, 0, 0) looking along +z.
+    std::vector<std::vector<OrbDescriptor>> training;
+    for (int j = 0; j < 3; ++j) {
+      hslam::RelocalizationKeyframe kf;
+      kf.id = 100 + j;
+      for (int i = 0; i < 300; ++i) {
+        kf.wX.emplace_back(10. * j + spread(rng), spread(rng), depth(rng));
+        kf.descriptors.push_back(randomDescriptor(rng));
+      }
+      training.push_back(kf.descriptors);
+      m_keyframes.push_back(kf);
+      m_kfPoses.push_back(lookingFrom(Eigen::Vector3d::Zero(), Eigen::Vector3d(10. * j, 0., 0.)));
+    }
+    hslam::VocabularyTrainingOptions options;
+    options.branching = 8;
+    options.levels = 3;
+    m_vocabulary = hslam::trainVocabulary(training, options);
+    m_database.reset(new hslam::KeyframeDatabase(m_vocabulary.wordCount()));
+    for (hslam::RelocalizationKeyframe &kf : m_keyframes) {
+      hslam::BowVector bow;
+      m_vocabulary.transform(kf.descriptors, bow, kf.direct, 1);
+      m_database->add(kf.id, bow);
+    }
+  }
+
+  //! The lost frame: place 1 seen from a displaced pose, descriptors with a few bits flipped, plus distractors.
+  hslam::RelocalizationFrame lostFrame(const SE3d &cTw, int distractors, bool withPlace, std::mt19937_64 &rng)
+  {
+    hslam::RelocalizationFrame frame;
+    std::normal_distribution<double> noise(0., 0.5);
+    std::uniform_real_distribution<double> u(0., 640.), v(0., 480.);
+    if (withPlace) {
+      const hslam::RelocalizationKeyframe &kf = m_keyframes[1];
+      for (std::size_t i = 0; i < kf.wX.size(); ++i) {
+        const Eigen::Vector3d cX = cTw * kf.wX[i];
+        const Eigen::Vector2d uv(kK.fx * cX.x() / cX.z() + kK.cx + noise(rng),
+                                 kK.fy * cX.y() / cX.z() + kK.cy + noise(rng));
+        if (uv.x() < 0 || uv.y() < 0 || uv.x() >= 640 || uv.y() >= 480) {
+          continue;
+        }
+        OrbDescriptor d = kf.descriptors[i];
+        for (int f = 0; f < 8; ++f) {
+          const int b = static_cast<int>(rng() % 256);
+          d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
+        }
+        frame.uv.push_back(uv);
+        frame.descriptors.push_back(d);
+      }
+    }
+    for (int i = 0; i < distractors; ++i) {
+      frame.uv.emplace_back(u(rng), v(rng));
+      frame.descriptors.push_back(randomDescriptor(rng));
+    }
+    hslam::BowVector bow;
+    m_vocabulary.transform(frame.descriptors, bow, frame.direct, 1);
+    m_frameBow = bow;
+    return frame;
+  }
+
+  std::vector<const hslam::RelocalizationKeyframe *> candidatesFor(const hslam::BowVector &bow)
+  {
+    std::vector<const hslam::RelocalizationKeyframe *> out;
+    for (const auto &c : m_database->query(bow, hslam::KeyframeDatabase::Query())) {
+      out.push_back(&m_keyframes[static_cast<std::size_t>(c.id - 100)]);
+    }
+    return out;
+  }
+
+  hslam::OrbVocabulary m_vocabulary;
+  std::unique_ptr<hslam::KeyframeDatabase> m_database;
+  std::vector<hslam::RelocalizationKeyframe> m_keyframes;
+  std::vector<SE3d> m_kfPoses;
+  hslam::BowVector m_frameBow;
+};
+
+TEST_F(Relocalization, RecoversThePoseOfALostFrameNearAKnownPlace)
+{
+  std::mt19937_64 rng(9);
+  // 30 cm to the side and 6 degrees of yaw away from keyframe 101.
+  const SE3d truth = lookingFrom(Eigen::Vector3d(0., 0.1, 0.), Eigen::Vector3d(10.3, 0.1, -0.2));
+  const hslam::RelocalizationFrame frame = lostFrame(truth, 200, true, rng);
+  const auto candidates = candidatesFor(m_frameBow);
+  ASSERT_FALSE(candidates.empty());
+  EXPECT_EQ(candidates.front()->id, 101);
+
+  const hslam::RelocalizationResult result = hslam::relocalize(frame, candidates, kK);
+  ASSERT_TRUE(result.success);
+  EXPECT_EQ(result.keyframeId, 101);
+  EXPECT_GT(result.inliers, 150);
+  EXPECT_LT((result.cTw.inverse().translation() - truth.inverse().translation()).norm(), 0.01);
+  EXPECT_LT((result.cTw.inverse() * truth).log().tail<3>().norm() * 180. / M_PI, 0.2);
+}
+
+TEST_F(Relocalization, AFrameOfDistractorsIsNotRelocalised)
+{
+  std::mt19937_64 rng(10);
+  const hslam::RelocalizationFrame frame = lostFrame(SE3d(), 500, false, rng);
+  std::vector<const hslam::RelocalizationKeyframe *> all;
+  for (const auto &kf : m_keyframes) {
+    all.push_back(&kf);
+  }
+  const hslam::RelocalizationResult result = hslam::relocalize(frame, all, kK);
+  EXPECT_FALSE(result.success);
+  EXPECT_EQ(result.candidatesTried, 3);
+}
+} // namespace
