@@ -230,8 +230,32 @@ void vpHSlamSyntheticScene::render(unsigned int i, vpImage<unsigned char> &I) co
   requireFrame(i, "render");
   std::vector<float> E;
   renderIrradiance(i, E);
-  const double exposureRatio = getExposure(i) / kBaseExposureMs;
-  std::seed_seq seq{m_seed, i};
+  formImage(E, getExposure(i) / kBaseExposureMs, {m_seed, i}, I);
+}
+
+void vpHSlamSyntheticScene::renderAtPose(const vpHomogeneousMatrix &wMc, vpImage<unsigned char> &I,
+                                         unsigned int noiseSeed) const
+{
+  requireConfigured("renderAtPose");
+  hslam::SimPose P;
+  for (unsigned int r = 0; r < 3; ++r) {
+    for (unsigned int c = 0; c < 3; ++c) {
+      P.wRc[3 * r + c] = wMc[r][c];
+    }
+    P.wtc[r] = wMc[r][3];
+  }
+  const vpCameraParameters cam = getCameraParameters();
+  const hslam::SimIntrinsics K = {cam.get_px(), cam.get_py(), cam.get_u0(), cam.get_v0(), m_width, m_height};
+  std::vector<float> E(static_cast<size_t>(m_width) * m_height, 0.f);
+  m_renderer->render(P, K, kSupersampling, E.data());
+  // A third seed value keeps this noise apart from that of frame noiseSeed in render() (two values).
+  formImage(E, 1.0, {m_seed, noiseSeed, 1u}, I);
+}
+
+void vpHSlamSyntheticScene::formImage(const std::vector<float> &E, double exposureRatio,
+                                      const std::vector<unsigned int> &seeds, vpImage<unsigned char> &I) const
+{
+  std::seed_seq seq(seeds.begin(), seeds.end());
   std::mt19937 rng(seq);
   std::normal_distribution<double> noise(0.0, m_effects.noiseSigma > 0.0 ? m_effects.noiseSigma : 1.0);
   I.resize(m_height, m_width);

@@ -125,6 +125,15 @@ public:
   void render(unsigned int i, vpImage<unsigned char> &I) const;
 
   /*!
+    Render the room seen from any camera-to-world pose \e wMc (world frame of getPose(), metres), for example a
+    camera moved by a simulator or a servo loop. Same intrinsics and photometric path as render(): vignette,
+    response and noise when configured, at the base exposure (10 ms), without motion blur (one pose, no motion).
+    \param noiseSeed : selects the noise draw (with the configure() seed); give each image its own.
+    \exception vpHSlamException::invalidArgument before configure().
+  */
+  void renderAtPose(const vpHomogeneousMatrix &wMc, vpImage<unsigned char> &I, unsigned int noiseSeed = 0) const;
+
+  /*!
     The 3D world point (metres) seen at pixel (u, v) of frame i (at the frame's pose; with motion blur, the
     centre of the exposure).
   */
@@ -146,6 +155,9 @@ private:
   void requireConfigured(const char *what) const;
   void requireFrame(unsigned int i, const char *what) const;
   void renderIrradiance(unsigned int i, std::vector<float> &E) const;
+  //! Irradiance E to 8-bit grey: exposure ratio to the base exposure, vignette, response, noise seeded by \e seeds.
+  void formImage(const std::vector<float> &E, double exposureRatio, const std::vector<unsigned int> &seeds,
+                 vpImage<unsigned char> &I) const;
   //! Surface point Pw (world, metres) and its depth seen at pixel (u, v) of frame i; throws naming \e what if none.
   void surfaceAt(double u, double v, unsigned int i, const char *what, double Pw[3], double &depth) const;
 
