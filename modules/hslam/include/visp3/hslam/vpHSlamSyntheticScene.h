@@ -125,9 +125,11 @@ public:
   void render(unsigned int i, vpImage<unsigned char> &I) const;
 
   /*!
-    Render the room seen from any camera-to-world pose \e wMc (world frame of getPose(), metres), for example a
-    camera moved by a simulator or a servo loop. Same intrinsics and photometric path as render(): vignette,
-    response and noise when configured, at the base exposure (10 ms), without motion blur (one pose, no motion).
+    Render the room seen from any camera pose, for example that of a camera moved by a simulator or a servo loop.
+    Same intrinsics and photometric path as render(): vignette, response and noise when configured, at the base
+    exposure (10 ms), without motion blur (one pose, no motion).
+    \param wMc : camera-to-world pose, in the world frame of getPose() (metres).
+    \param I : the 8-bit grey image, resized to getWidth() x getHeight().
     \param noiseSeed : selects the noise draw (with the configure() seed); give each image its own.
     \exception vpHSlamException::invalidArgument before configure().
   */
