@@ -228,7 +228,13 @@ vpHSlamCamera vpHSlamCamera::loadViSPXml(const std::string &path, const std::str
     ScopedStreamMute mute;
     vpXmlParserCamera parser;
     // Stored sizes are passed as stored (0 when absent) so that ViSP's own size match selects this very camera.
-    status = parser.parse(K, path, chosen->name, projModel, sizeStored ? camWidth : 0, sizeStored ? camHeight : 0);
+    try {
+      status = parser.parse(K, path, chosen->name, projModel, sizeStored ? camWidth : 0, sizeStored ? camHeight : 0);
+    } catch (const vpException &e) {
+      // ViSP refuses some values itself (e.g. "Camera parameter px = 0", found by fuzz_camera_xml).
+      throw vpHSlamException(vpHSlamException::invalidCalibration,
+                             path + ": camera '" + chosen->name + "': " + e.getStringMessage());
+    }
   }
   if (status != vpXmlParserCamera::SEQUENCE_OK) {
     throw vpHSlamException(vpHSlamException::parseError,

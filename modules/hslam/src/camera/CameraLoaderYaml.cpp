@@ -119,6 +119,8 @@ vpHSlamCamera readYamlCamera(const cv::FileNode &cam, const std::string &path)
 std::string withOpenCVDirective(const std::string &path)
 {
   std::string text = hslam::readTextFile(path, "camera YAML");
+  hslam::requireNoNulByte(text, path);
+  hslam::requireYamlLineShapes(text, path); // before OpenCV's reader, which can hang on other lines
   const std::string directive = "%YAML:1.0";
   if (hslam::startsWith(text, "%YAML:")) {
     return text;

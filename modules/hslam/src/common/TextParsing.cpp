@@ -3,6 +3,7 @@
  */
 #include "common/TextParsing.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -121,6 +122,73 @@ std::string readTextFile(const std::string &path, const std::string &what)
     throwAt(vpHSlamException::fileUnreadable, path, 0, "read error");
   }
   return buffer.str();
+}
+
+void requireNoNulByte(const std::string &text, const std::string &path)
+{
+  const std::size_t nul = text.find('\0');
+  if (nul != std::string::npos) {
+    const std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + nul, '\n'));
+    throwAt(vpHSlamException::parseError, path, line, "NUL byte: not a text file");
+  }
+}
+
+void requireYamlLineShapes(const std::string &text, const std::string &path)
+{
+  int depth = 0;              // open [ and { not closed yet, over lines
+  std::size_t rootIndent = 0; // indentation of the first key line: no line outside brackets may have less
+  std::size_t rootLine = 0;   // its line number, 0 before it
+  std::size_t lineNumber = 0, begin = 0;
+  while (begin < text.size()) {
+    std::size_t end = text.find('\n', begin);
+    if (end == std::string::npos) {
+      end = text.size();
+    }
+    ++lineNumber;
+    const std::string line = text.substr(begin, end - begin);
+    begin = end + 1;
+    const std::string content = trim(line);
+    const bool outside = depth == 0;
+    if (outside &&
+        (content.empty() || content[0] == '#' || content[0] == '%' || content == "---" || content == "...")) {
+      continue; // blank, comment, directive or document marker: no structure
+    }
+    // Brackets and the key colon, outside quotes and comments.
+    char quote = 0;
+    bool keyColon = false;
+    for (std::size_t i = 0; i < line.size(); ++i) {
+      const char c = line[i];
+      if (quote != 0) {
+        quote = c == quote ? 0 : quote;
+      } else if (c == '"' || c == '\'') {
+        quote = c;
+      } else if (c == '#' && (i == 0 || std::isspace(static_cast<unsigned char>(line[i - 1])))) {
+        break;
+      } else if (c == '[' || c == '{') {
+        ++depth;
+      } else if ((c == ']' || c == '}') && depth > 0) {
+        --depth;
+      } else if (c == ':' && depth == 0 &&
+                 (i + 1 == line.size() || std::isspace(static_cast<unsigned char>(line[i + 1])))) {
+        keyColon = true;
+      }
+    }
+    if (!outside) {
+      continue; // inside a flow sequence or map: any continuation
+    }
+    if (content != "-" && !startsWith(content, "- ") && !keyColon) {
+      throwAt(vpHSlamException::parseError, path, lineNumber,
+              "'" + content + "' is neither 'key: value' nor '- item' (nor inside [...] or {...})");
+    }
+    const std::size_t indent = line.find_first_not_of(" \t");
+    if (rootLine == 0) {
+      rootIndent = indent;
+      rootLine = lineNumber;
+    } else if (indent < rootIndent) {
+      throwAt(vpHSlamException::parseError, path, lineNumber,
+              "less indented than the first key (line " + std::to_string(rootLine) + ")");
+    }
+  }
 }
 
 std::string trim(const std::string &text)

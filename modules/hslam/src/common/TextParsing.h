@@ -54,6 +54,23 @@ VISP_EXPORT std::vector<TextLine> readDataLines(const std::string &path, const s
 //! The whole content of a text file. \exception as readTextLines().
 VISP_EXPORT std::string readTextFile(const std::string &path, const std::string &what = "file");
 
+/*!
+  Refuses \e text (the content of \e path) when it holds a NUL byte: not a text file. Called before text goes to
+  OpenCV's YAML reader, which loops for ever on one (found by fuzz_parameters).
+  \exception vpHSlamException::parseError naming the file and the line of the first NUL byte.
+*/
+VISP_EXPORT void requireNoNulByte(const std::string &text, const std::string &path);
+
+/*!
+  Refuses YAML \e text (the content of \e path) with a line outside any [...] or {...} that is neither a comment, a
+  directive (%...), a document marker alone ("---" or "..."), a "key:" line nor a "- item" line, or less indented
+  than the first key line. The files H-SLAM reads
+  (settings, sensor.yaml, Kalibr camchains) never have one, and OpenCV's YAML reader can loop for ever on such a
+  line (a bare "18, -0.5" after an indented map; found by fuzz_camera_yaml).
+  \exception vpHSlamException::parseError naming the file and the line.
+*/
+VISP_EXPORT void requireYamlLineShapes(const std::string &text, const std::string &path);
+
 //! \e text without leading and trailing blanks (space, tab, '\\r', '\\n', '\\f', '\\v').
 VISP_EXPORT std::string trim(const std::string &text);
 

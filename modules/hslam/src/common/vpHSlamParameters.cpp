@@ -1,6 +1,8 @@
 /*
  * H-SLAM for ViSP.
  */
+#include "common/TextParsing.h"
+
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
@@ -455,6 +457,9 @@ void vpHSlamParameters::load(const std::string &path)
     throw vpHSlamException(vpHSlamException::parseError,
                            where + "line 1 must be the YAML directive '%YAML:1.0' (OpenCV FileStorage format)");
   }
+  const std::string text = hslam::readTextFile(path, "settings file");
+  hslam::requireNoNulByte(text, path);
+  hslam::requireYamlLineShapes(text, path); // before OpenCV's reader, which can hang on other lines
   cv::FileStorage storage;
   try {
     storage.open(path, cv::FileStorage::READ | cv::FileStorage::FORMAT_YAML);

@@ -56,6 +56,9 @@ std::vector<StampedPose> readEurocGroundTruth(const std::string &csvPath)
 Eigen::Matrix4d readEurocSensorExtrinsics(const std::string &sensorYamlPath)
 {
   requireFileExists(sensorYamlPath, "EuRoC sensor.yaml");
+  const std::string text = readTextFile(sensorYamlPath, "EuRoC sensor.yaml");
+  requireNoNulByte(text, sensorYamlPath);
+  requireYamlLineShapes(text, sensorYamlPath); // before OpenCV's reader, which can hang on other lines
   std::vector<double> data;
   try {
     cv::FileStorage fs(sensorYamlPath, cv::FileStorage::READ);
