@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # One entry point for a fresh Debian 12 machine (see README.md):
 #   bash cmake/run.sh demo   install what is missing, build, run the main job on data reachable by default
-#   bash cmake/run.sh test   install what is missing, build, run the test suite (benchmarks excluded)
+#   bash cmake/run.sh test   install what is missing, build, run the test suite (benchmarks excluded), then the
+#                            same suite built with AddressSanitizer + UBSan ($BUILD_DIR-asan) and the threaded
+#                            tests built with ThreadSanitizer ($BUILD_DIR-tsan); any sanitizer report fails
 #   bash cmake/run.sh bench  install what is missing, build, run the benchmarks (ctest label "benchmark")
-# Environment: BUILD_DIR (default build), JOBS (default nproc), HSLAM_SKIP_INSTALL=1 to skip apt-get.
+# Environment: BUILD_DIR (default build), JOBS (default nproc), HSLAM_SKIP_INSTALL=1 to skip apt-get,
+# HSLAM_SANITIZERS=0 to skip the sanitizer passes of `test`.
 set -euo pipefail
 
 cmd=${1:-}
@@ -19,9 +22,11 @@ repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${BUILD_DIR:-$repo/build}
 jobs=${JOBS:-$(nproc)}
 
-# Debian packages the build, the tests and the demo need. Installed only when missing.
+# Debian packages the build, the tests and the demo need. Installed only when missing. clang, its sanitizer
+# runtimes (libclang-rt-dev, libFuzzer included) and LLVM's OpenMP (ViSP's flags ask for -fopenmp) serve the fuzz
+# targets of `test`.
 packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
-  libbenchmark-dev libv4l-dev libzip-dev visp-images-data)
+  libbenchmark-dev libv4l-dev libzip-dev visp-images-data clang libclang-rt-dev libomp-dev)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()
@@ -44,10 +49,16 @@ cmake -S "$repo" -B "$build" -DCMAKE_BUILD_TYPE=Release >"$build.configure.log" 
 }
 cmake --build "$build" -j "$jobs"
 
+# A test that hangs fails after this many seconds instead of stalling the whole run.
+test_timeout=${HSLAM_TEST_TIMEOUT:-900}
+
 case "$cmd" in
   test)
     echo "== running the tests"
-    ctest --test-dir "$build" -LE benchmark --output-on-failure -j "$jobs"
+    ctest --test-dir "$build" -LE benchmark --output-on-failure -j "$jobs" --timeout "$test_timeout"
+    if [ "${HSLAM_SANITIZERS:-1}" != 0 ]; then
+      bash "$repo/cmake/sanitizers.sh" "$build" "$jobs" "$test_timeout"
+    fi
     ;;
   bench)
     echo "== running the benchmarks (machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-))"

@@ -1,0 +1,55 @@
+# Sanitizer builds: -DHSLAM_SANITIZE=address,undefined (AddressSanitizer + UndefinedBehaviorSanitizer) or
+# -DHSLAM_SANITIZE=thread (ThreadSanitizer). Empty (the default) builds without sanitizers.
+# Fuzzing build: -DHSLAM_FUZZ=ON with clang (-DCMAKE_CXX_COMPILER=clang++): libFuzzer targets of test/fuzz, with
+# everything compiled for coverage-guided fuzzing under AddressSanitizer + UBSan.
+#
+# Every target of the project (library, tutorials, tests) is instrumented; the system libraries (ViSP, OpenCV,
+# Ceres) are not, which AddressSanitizer and UBSan tolerate. Any report stops the program (-fno-sanitize-recover
+# for UBSan; ASan stops on its first report by default), so a test with a report fails. cmake/run.sh test runs the
+# ASan+UBSan suite after the normal one and the ThreadSanitizer pass on the real-time (threaded) tests.
+set(HSLAM_SANITIZE "" CACHE STRING "Sanitizers to build with: empty, address,undefined or thread")
+
+if(HSLAM_SANITIZE)
+  string(REPLACE "," ";" _hslam_sanitizers "${HSLAM_SANITIZE}")
+  foreach(_s ${_hslam_sanitizers})
+    if(NOT _s MATCHES "^(address|undefined|thread)$")
+      message(FATAL_ERROR "HSLAM_SANITIZE: unknown sanitizer '${_s}' (address, undefined or thread)")
+    endif()
+  endforeach()
+  if("thread" IN_LIST _hslam_sanitizers AND "address" IN_LIST _hslam_sanitizers)
+    message(FATAL_ERROR "HSLAM_SANITIZE: thread and address cannot be combined")
+  endif()
+  set(_hslam_flags "-fsanitize=${HSLAM_SANITIZE}" -fno-omit-frame-pointer -g1)
+  if("undefined" IN_LIST _hslam_sanitizers)
+    # Every UBSan check stops the program, except nonnull-attribute: it stays recoverable only so that its one
+    # suppression (ViSP's vpImage copy, see cmake/sanitizers/ubsan.supp) can apply; UBSAN_OPTIONS=halt_on_error=1
+    # still stops on any report that is not suppressed.
+    list(APPEND _hslam_flags -fno-sanitize-recover=all -fsanitize-recover=nonnull-attribute)
+  endif()
+  # GCC 12's flow analysis is confused by the sanitizer instrumentation: it reports -Wmaybe-uninitialized inside
+  # libstdc++'s <regex> (std::function copies in regex_automaton.h) that the plain build does not; the plain build
+  # keeps the warning.
+  list(APPEND _hslam_flags -Wno-maybe-uninitialized)
+  if("thread" IN_LIST _hslam_sanitizers)
+    # GCC warns that TSan does not model std::atomic_thread_fence (-Wtsan). The one fence (FramePreprocessor's frame
+    # pool) only strengthens the ordering of the shared_ptr count it follows; a synchronisation TSan missed would
+    # show as a false race report, which the pass would fail on.
+    list(APPEND _hslam_flags -Wno-tsan)
+  endif()
+  add_compile_options(${_hslam_flags})
+  add_link_options("-fsanitize=${HSLAM_SANITIZE}")
+  message(STATUS "HSLAM_SANITIZE: building with -fsanitize=${HSLAM_SANITIZE}")
+endif()
+
+option(HSLAM_FUZZ "Build the libFuzzer targets of test/fuzz (clang only; everything built with ASan + UBSan)" OFF)
+if(HSLAM_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "HSLAM_FUZZ needs clang (libFuzzer): configure with -DCMAKE_CXX_COMPILER=clang++")
+  endif()
+  if(HSLAM_SANITIZE)
+    message(FATAL_ERROR "HSLAM_FUZZ brings its own sanitizers: leave HSLAM_SANITIZE empty")
+  endif()
+  add_compile_options(-fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all
+                      -fsanitize-recover=nonnull-attribute -fno-omit-frame-pointer -g1)
+  add_link_options(-fsanitize=address,undefined)
+endif()

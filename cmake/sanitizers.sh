@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# Sanitizer passes of `bash cmake/run.sh test` (called by it after the normal suite; see README.md, "Reliability"):
+#   1. AddressSanitizer + UndefinedBehaviorSanitizer build in BUILD-asan, whole ctest suite without benchmarks;
+#   2. ThreadSanitizer build in BUILD-tsan of the programs that run threads, their threaded tests;
+#   3. libFuzzer build (clang) in BUILD-fuzz of the parser fuzz targets, a short run of each (HSLAM_FUZZ_RUNS inputs
+#      from a fixed seed).
+# Every sanitizer stops the program at its first report (halt_on_error), so a report fails its test.
+# Usage: bash cmake/sanitizers.sh BUILD JOBS TIMEOUT_S
+set -euo pipefail
+
+build=$1
+jobs=$2
+timeout=$3
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+
+configure() { # dir, cmake options...
+  local dir=$1
+  shift
+  cmake -S "$repo" -B "$dir" -DCMAKE_BUILD_TYPE=Release -DHSLAM_BUILD_BENCHMARKS=OFF "$@" >"$dir.configure.log" 2>&1 || {
+    cat "$dir.configure.log"
+    exit 1
+  }
+}
+
+# --- AddressSanitizer + UndefinedBehaviorSanitizer: the whole suite -------------------------------------------------
+asan="$build-asan"
+echo "== AddressSanitizer + UBSan: building in $asan"
+start=$(date +%s)
+configure "$asan" -DHSLAM_SANITIZE=address,undefined
+cmake --build "$asan" -j "$jobs"
+echo "== AddressSanitizer + UBSan: running the tests (built in $(($(date +%s) - start)) s)"
+start=$(date +%s)
+# Suppressions: third-party code only, each with its reason, in cmake/sanitizers/.
+export ASAN_OPTIONS=halt_on_error=1:detect_leaks=1:check_initialization_order=1:strict_init_order=1
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1:suppressions=$repo/cmake/sanitizers/ubsan.supp
+export LSAN_OPTIONS=suppressions=$repo/cmake/sanitizers/lsan.supp
+# OpenCV probes USB cameras through libgphoto2 whenever it opens a video file, and libgphoto2 leaks what it finds:
+# the gphoto2 back-end is off for this pass (a video file never needs it).
+export OPENCV_VIDEOIO_PRIORITY_GPHOTO2=0
+# package.consumer builds a separate project against the installed (instrumented) library: it needs the same flags.
+export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undefined"
+ctest --test-dir "$asan" -LE benchmark --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
+echo "== AddressSanitizer + UBSan: tests took $(($(date +%s) - start)) s"
+unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS OPENCV_VIDEOIO_PRIORITY_GPHOTO2 CXXFLAGS LDFLAGS
+
+# --- ThreadSanitizer: the tests that run the mapping thread, the worker pool or the real-time program ----------------
+# Kernels with many bits of mmap randomisation (vm.mmap_rnd_bits > 28) break TSan's fixed memory layout ("unexpected
+# memory mapping"): the build (its test discovery runs the programs) and the tests run with ASLR off when setarch
+# allows it.
+tsan="$build-tsan"
+no_aslr=()
+if setarch "$(uname -m)" -R true 2>/dev/null; then
+  no_aslr=(setarch "$(uname -m)" -R)
+fi
+targets=(test_window_threads test_worker_pool test_system_synthetic test_system_inputs test_system_tutorial
+  test_faults tutorial-hslam-dataset)
+# Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping).
+threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals'
+echo "== ThreadSanitizer: building ${targets[*]} in $tsan${no_aslr[*]:+ (under ${no_aslr[*]})}"
+start=$(date +%s)
+configure "$tsan" -DHSLAM_SANITIZE=thread
+"${no_aslr[@]}" cmake --build "$tsan" -j "$jobs" --target "${targets[@]}"
+echo "== ThreadSanitizer: running the threaded tests (built in $(($(date +%s) - start)) s)"
+start=$(date +%s)
+# OpenMP (the synthetic renderer) on one thread: libgomp is not instrumented, its own synchronisation is invisible.
+OMP_NUM_THREADS=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+  "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
+echo "== ThreadSanitizer: tests took $(($(date +%s) - start)) s"
+
+# --- libFuzzer: every parser of outside input, a short run each (the long runs have the label "benchmark") ----------
+fuzz="$build-fuzz"
+echo "== libFuzzer: building the fuzz targets in $fuzz (clang)"
+start=$(date +%s)
+configure "$fuzz" -DCMAKE_CXX_COMPILER=clang++ -DHSLAM_FUZZ=ON -DHSLAM_BUILD_TUTORIALS=OFF \
+  -DHSLAM_FUZZ_RUNS="${HSLAM_FUZZ_RUNS:-30000}"
+cmake --build "$fuzz" -j "$jobs" --target hslam_fuzz_targets
+echo "== libFuzzer: ${HSLAM_FUZZ_RUNS:-30000} inputs of each target (built in $(($(date +%s) - start)) s)"
+start=$(date +%s)
+LSAN_OPTIONS=suppressions=$repo/cmake/sanitizers/lsan.supp \
+  UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1:suppressions=$repo/cmake/sanitizers/ubsan.supp \
+  ctest --test-dir "$fuzz" -L fuzz --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
+echo "== libFuzzer: runs took $(($(date +%s) - start)) s"
