@@ -24,9 +24,9 @@ jobs=${JOBS:-$(nproc)}
 
 # Debian packages the build, the tests and the demo need. Installed only when missing. clang, its sanitizer
 # runtimes (libclang-rt-dev, libFuzzer included) and LLVM's OpenMP (ViSP's flags ask for -fopenmp) serve the fuzz
-# targets of `test`.
+# targets of `test`; doxygen the documentation test, xvfb and xauth the live-window test (a virtual X server).
 packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
-  libbenchmark-dev libv4l-dev libzip-dev visp-images-data clang libclang-rt-dev libomp-dev)
+  libbenchmark-dev libv4l-dev libzip-dev visp-images-data clang libclang-rt-dev libomp-dev doxygen xvfb xauth)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()
