@@ -5,11 +5,15 @@
 
 #include <visp3/core/vpIoTools.h>
 
+#include <cerrno>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
+#include <signal.h>
 #include <string>
+#include <system_error>
 #include <unistd.h>
 
 namespace hslam_fuzz
@@ -24,6 +28,17 @@ inline const std::string &scratchDir()
     const std::string base = vpIoTools::checkDirectory("/dev/shm") ? std::string("/dev/shm")
                              : (tmp && *tmp)                       ? std::string(tmp)
                                                                    : std::string("/tmp");
+    // libFuzzer ends some runs with _Exit (no exit handlers): remove what such runs left, when their process is gone.
+    std::error_code error;
+    for (const auto &entry : std::filesystem::directory_iterator(base, error)) {
+      const std::string name = entry.path().filename().string();
+      if (name.compare(0, 11, "hslam-fuzz-") == 0) {
+        const long pid = std::strtol(name.c_str() + 11, nullptr, 10);
+        if (pid > 0 && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH) {
+          std::filesystem::remove_all(entry.path(), error);
+        }
+      }
+    }
     const std::string *path = new std::string(base + "/hslam-fuzz-" + std::to_string(static_cast<long>(::getpid())));
     vpIoTools::makeDirectory(*path);
     std::atexit([]() { vpIoTools::remove(scratchDir()); });

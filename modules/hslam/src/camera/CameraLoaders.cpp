@@ -272,7 +272,13 @@ vpHSlamCamera vpHSlamCamera::loadDso(const std::string &path)
     throw vpHSlamException(vpHSlamException::invalidCalibration, where + ": rectified focal lengths must be positive");
   }
   vpCameraParameters K;
-  K.initPersProjWithoutDistortion(ofx, ofy, ocx, ocy);
+  try {
+    K.initPersProjWithoutDistortion(ofx, ofy, ocx, ocy);
+  } catch (const vpException &e) {
+    // ViSP refuses a focal length that is positive but too small to invert (found by fuzz_camera_dso).
+    throw vpHSlamException(vpHSlamException::invalidCalibration,
+                           where + ": rectified intrinsics refused by ViSP (" + e.getStringMessage() + ")");
+  }
   applyRectification(cam, where, rectifyExplicit, outWidth, outHeight, K);
   return cam;
 }
