@@ -26,7 +26,7 @@ jobs=${JOBS:-$(nproc)}
 # runtimes (libclang-rt-dev, libFuzzer included) and LLVM's OpenMP (ViSP's flags ask for -fopenmp) serve the fuzz
 # targets of `test`; doxygen the documentation test, xvfb and xauth the live-window test (a virtual X server).
 packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
-  libbenchmark-dev libv4l-dev libzip-dev visp-images-data clang libclang-rt-dev libomp-dev doxygen xvfb xauth)
+  libbenchmark-dev libv4l-dev libzip-dev zlib1g-dev visp-images-data clang libclang-rt-dev libomp-dev doxygen xvfb xauth)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()
