@@ -153,6 +153,10 @@ void requireYamlLineShapes(const std::string &text, const std::string &path)
         (content.empty() || content[0] == '#' || content[0] == '%' || content == "---" || content == "...")) {
       continue; // blank, comment, directive or document marker: no structure
     }
+    if (outside && (startsWith(content, "...") || startsWith(content, "---"))) {
+      // A document marker with text after it sends OpenCV 4.6's YAML reader into an endless loop (fuzz_parameters).
+      throwAt(vpHSlamException::parseError, path, lineNumber, "'" + content + "': a document marker followed by text");
+    }
     // Brackets and the key colon, outside quotes and comments.
     char quote = 0;
     bool keyColon = false;
