@@ -188,6 +188,9 @@ std::string PerturbedYaml(const std::string &path)
         out << RealText(value == 0. ? 0.5 : value * 0.9);
       } else if (node.isString() && (StringValue(node) == "true" || StringValue(node) == "false")) {
         out << (StringValue(node) == "true" ? "false" : "true");
+      } else if (node.isString() && std::string(section.name()) == "tracking") {
+        const int mode = static_cast<int>(vpHSlamParameters::parseTrackingMode(StringValue(node)));
+        out << vpHSlamParameters::trackingModeName(static_cast<vpHSlamParameters::TrackingMode>((mode + 1) % 3));
       } else if (node.isString()) {
         const int mode = static_cast<int>(vpHSlamParameters::parseMode(StringValue(node)));
         out << vpHSlamParameters::modeName(static_cast<vpHSlamParameters::Mode>((mode + 1) % 3));
@@ -450,6 +453,13 @@ TEST(Parameters, ModeNames)
   EXPECT_EQ(vpHSlamParameters::modeName(vpHSlamParameters::modeVoReuse), "vo-reuse");
   EXPECT_EQ(vpHSlamParameters::modeName(vpHSlamParameters::modeSlam), "slam");
   ExpectError([] { vpHSlamParameters::parseMode("SLAM"); }, vpHSlamException::invalidArgument, {"SLAM"});
+  for (vpHSlamParameters::TrackingMode mode : {vpHSlamParameters::trackingDirect, vpHSlamParameters::trackingIndirect,
+                                               vpHSlamParameters::trackingHybrid}) {
+    EXPECT_EQ(vpHSlamParameters::parseTrackingMode(vpHSlamParameters::trackingModeName(mode)), mode);
+  }
+  EXPECT_EQ(vpHSlamParameters::trackingModeName(vpHSlamParameters::trackingHybrid), "hybrid");
+  EXPECT_EQ(vpHSlamParameters().tracking.mode, vpHSlamParameters::trackingHybrid);
+  ExpectError([] { vpHSlamParameters::parseTrackingMode("dso"); }, vpHSlamException::invalidArgument, {"dso"});
 }
 
 // data/hslam-default.yaml is the documented default configuration. It must be exactly what save() writes for the

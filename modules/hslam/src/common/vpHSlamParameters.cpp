@@ -28,7 +28,7 @@ namespace
 using Params = vpHSlamParameters;
 
 //! Where one setting lives inside a vpHSlamParameters; the alternative says its type (and so its YAML form).
-using FieldRef = std::variant<int *, double *, bool *, std::vector<int> *, Params::Mode *>;
+using FieldRef = std::variant<int *, double *, bool *, std::vector<int> *, Params::Mode *, Params::TrackingMode *>;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -146,6 +146,19 @@ const Field kFields[] = {
   HSLAM_PARAM(initializer, initialIdepth, positive(), "median inverse depth of the first map, 1/m"),
   HSLAM_PARAM(initializer, orbFeatures, atLeast(8), "ORB features per frame while initialising"),
 
+  HSLAM_PARAM(tracking, mode, anyValue(), "direct, indirect or hybrid pose tracking"),
+  HSLAM_PARAM(tracking, frameFeatures, atLeast(0), "FAST corners described per new frame for matching"),
+  HSLAM_PARAM(tracking, frameFastThreshold, between(1, 255), "FAST threshold on new frames"),
+  HSLAM_PARAM(tracking, matchRadiusPx, positive(), "ORB search radius around a predicted pixel, pixels"),
+  HSLAM_PARAM(tracking, matchMaxDistance, between(0, 256), "Hamming distance accepted at most"),
+  HSLAM_PARAM(tracking, matchRatio, openInterval(0., 1.), "best match below this * second best"),
+  HSLAM_PARAM(tracking, minMatchesBeforeWidening, atLeast(0), "fewer matches: search again, twice the radius"),
+  HSLAM_PARAM(tracking, minGeometricInliers, atLeast(4), "inliers the indirect step needs to give a pose"),
+  HSLAM_PARAM(tracking, relocalize, anyValue(), "relocalise in the same map before starting a new segment"),
+  HSLAM_PARAM(tracking, relocalizationTimeout, atLeast(0.), "seconds of failed relocalisation before a new segment"),
+  HSLAM_PARAM(tracking, relocalizationCandidates, atLeast(1), "keyframes tried per lost frame"),
+  HSLAM_PARAM(tracking, relocalizationMinInliers, atLeast(6), "PnP inliers needed to accept a relocalisation"),
+
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),
   HSLAM_PARAM(system, workerThreads, atLeast(0), "threads for residual accumulation (0 = caller only)"),
@@ -197,6 +210,7 @@ std::string formatValue(const FieldRef &ref)
     std::string operator()(const double *v) const { return formatReal(*v); }
     std::string operator()(const bool *v) const { return *v ? "true" : "false"; }
     std::string operator()(const Params::Mode *v) const { return Params::modeName(*v); }
+    std::string operator()(const Params::TrackingMode *v) const { return Params::trackingModeName(*v); }
     std::string operator()(const std::vector<int> *v) const
     {
       std::string text = "[";
@@ -303,7 +317,8 @@ void checkAll(const Params &params, const std::string &where)
 //! "; valid: ..." for the documentation line of a numeric field in save(), ordering rules included.
 std::string validityNote(const Field &field, const FieldRef &ref)
 {
-  if (std::holds_alternative<bool *>(ref) || std::holds_alternative<Params::Mode *>(ref)) {
+  if (std::holds_alternative<bool *>(ref) || std::holds_alternative<Params::Mode *>(ref) ||
+      std::holds_alternative<Params::TrackingMode *>(ref)) {
     return std::string();
   }
   std::string note = "; valid: ";
@@ -397,6 +412,15 @@ void readNode(const cv::FileNode &node, const Field &field, Params &params, cons
     }
     try {
       **m = Params::parseMode(nodeText(node));
+    } catch (const vpHSlamException &e) {
+      throw vpHSlamException(vpHSlamException::invalidArgument, prefix + e.getStringMessage());
+    }
+  } else if (Params::TrackingMode *const *t = std::get_if<Params::TrackingMode *>(&ref)) {
+    if (!node.isString()) {
+      throw vpHSlamException(vpHSlamException::parseError, prefix + "expected a tracking mode name");
+    }
+    try {
+      **t = Params::parseTrackingMode(nodeText(node));
     } catch (const vpHSlamException &e) {
       throw vpHSlamException(vpHSlamException::invalidArgument, prefix + e.getStringMessage());
     }
@@ -552,4 +576,29 @@ vpHSlamParameters::Mode vpHSlamParameters::parseMode(const std::string &name)
   }
   throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamParameters::parseMode: unknown mode '" + name +
                                                                 "' (expected vo-strict, vo-reuse, slam)");
+}
+
+std::string vpHSlamParameters::trackingModeName(TrackingMode mode)
+{
+  switch (mode) {
+  case trackingDirect:
+    return "direct";
+  case trackingIndirect:
+    return "indirect";
+  case trackingHybrid:
+    return "hybrid";
+  }
+  throw vpHSlamException(vpHSlamException::invalidArgument,
+                         "vpHSlamParameters::trackingModeName: unknown value " + std::to_string(static_cast<int>(mode)));
+}
+
+vpHSlamParameters::TrackingMode vpHSlamParameters::parseTrackingMode(const std::string &name)
+{
+  for (TrackingMode mode : {trackingDirect, trackingIndirect, trackingHybrid}) {
+    if (name == trackingModeName(mode)) {
+      return mode;
+    }
+  }
+  throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamParameters::parseTrackingMode: unknown mode '" +
+                                                                name + "' (expected direct, indirect, hybrid)");
 }

@@ -545,6 +545,12 @@ vpHSlam::Statistics SlamSystem::statistics() const
   return s;
 }
 
+std::vector<vpImagePoint> SlamSystem::descriptorMatches() const
+{
+  std::lock_guard<std::mutex> lock(m_imageMutex);
+  return m_lastMatches;
+}
+
 void SlamSystem::rectifiedImage(vpImage<unsigned char> &I) const
 {
   std::lock_guard<std::mutex> lock(m_imageMutex);

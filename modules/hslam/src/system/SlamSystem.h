@@ -72,6 +72,7 @@ public:
   bool hasPose() const;
   std::vector<vpHSlam::Keyframe> keyframes() const;
   std::vector<vpColVector> activePoints(std::vector<double> *depths) const;
+  std::vector<vpImagePoint> descriptorMatches() const;
   vpHSlamTrajectory trajectory(int segment) const { return m_recorder.trajectory(segment); }
   vpHSlamTrajectory keyframeTrajectory(int segment) const { return m_recorder.keyframeTrajectory(segment); }
   std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
@@ -148,6 +149,7 @@ private:
   std::atomic<int> m_keyframeCount{0}; //!< keyframe ids handed out (the next id)
   mutable std::mutex m_imageMutex;
   vpImage<unsigned char> m_lastImage;             //!< rectified raw image of the last frame (display)
+  std::vector<vpImagePoint> m_lastMatches;        //!< descriptor-matched inlier pixels of the last frame (display)
   std::atomic<unsigned int> m_segmentsStarted{0}; //!< segments that got a map (successful initialisations)
   std::atomic<bool> m_restartRequested{false};    //!< set by the back end when the initialisation looks wrong
 

@@ -52,6 +52,11 @@ std::vector<vpColVector> vpHSlam::getActivePoints(std::vector<double> *depths) c
   return m_system->activePoints(depths);
 }
 
+std::vector<vpImagePoint> vpHSlam::getDescriptorMatches() const
+{
+  return m_system->descriptorMatches();
+}
+
 vpHSlamTrajectory vpHSlam::getTrajectory(int segment) const
 {
   return m_system->trajectory(segment);

@@ -12,6 +12,7 @@
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpImagePoint.h>
 #include <visp3/core/vpImage.h>
 #include <visp3/hslam/vpHSlamCamera.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
@@ -125,6 +126,12 @@ public:
     double mapMemoryMb = 0.;                //!< estimated memory held by keyframes (images, points), MB
     double mapMemoryMbPerKeyframe = 0.;     //!< mapMemoryMb divided by the keyframes held, MB
     unsigned int keyframesHeld = 0;         //!< keyframes whose data is held (window + kept marginalised ones)
+    double orbMatchesMedian = 0.;           //!< hybrid/indirect tracking: ORB matches per tracked frame, median
+    double orbInliersMedian = 0.;           //!< the same, geometric inliers of the pose-only step, median
+    double geometricWeightMedian = 0.;      //!< K of eq. 4 at the finest level, median over hybrid-tracked frames
+    unsigned int relocalizationsAttempted = 0; //!< lost frames for which relocalisation was tried
+    unsigned int relocalizationsSucceeded = 0; //!< relocalisations after which tracking resumed in the same map
+    double descriptorKbPerKeyframe = 0.;       //!< memory the descriptors add to a keyframe (points + BoW), KB
   };
 
   /*!
@@ -172,6 +179,12 @@ public:
     window, with their depth in the newest keyframe's camera (same order) when \e depths is not null.
   */
   std::vector<vpColVector> getActivePoints(std::vector<double> *depths = nullptr) const;
+  /*!
+    Pixels (rectified image of the last frame, see getRectifiedImage()) of the keypoints the last frame matched to
+    map points by ORB descriptor and kept as geometric inliers (hybrid and indirect tracking; empty in direct mode
+    or when the frame was not tracked).
+  */
+  std::vector<vpImagePoint> getDescriptorMatches() const;
 
   /*!
     Trajectory of every frame that has a pose (camera-to-world), each frame expressed relative to its reference

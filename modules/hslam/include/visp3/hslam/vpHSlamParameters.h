@@ -17,7 +17,7 @@
 /*!
   \class vpHSlamParameters
   \ingroup group_hslam
-  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, system), each
+  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, system), each
   field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part) unless
   noted.
 
@@ -47,6 +47,13 @@ public:
     modeVoStrict, //!< window only, marginalised points discarded (DSO-like)
     modeVoReuse,  //!< global points re-used, no loop closure
     modeSlam      //!< everything (default once loop closure exists)
+  };
+
+  //! Which errors the pose of a new frame minimises (paper section 3.2; the ablations of section 4).
+  enum TrackingMode {
+    trackingDirect,   //!< photometric error only (DSO's coarse tracker; no descriptors are computed)
+    trackingIndirect, //!< reprojection error of ORB matches only (the photometric side still estimates (a, b))
+    trackingHybrid    //!< both, weighted by the paper's eq. 4 (default)
   };
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
@@ -120,6 +127,26 @@ public:
     int orbFeatures = 1000;          //!< ORB features per frame while initialising (ORB-SLAM2 TUM/EuRoC: 1000)
   };
 
+  /*!
+    Hybrid pose tracking: descriptor sharing, ORB matching of the map into the new frame, joint photometric and
+    geometric optimisation, relocalisation (paper sections 3.1, 3.2). Matching defaults are ORB-SLAM2's tracking
+    values; the others were measured on the shared sequences (README, "Hybrid tracking").
+  */
+  struct Tracking {
+    TrackingMode mode = trackingHybrid; //!< direct, indirect or hybrid
+    int frameFeatures = 1000;           //!< FAST corners described per new frame for matching (ORB-SLAM2: 1000)
+    int frameFastThreshold = 7;         //!< FAST threshold on new frames, intensity units (as features.fastThreshold)
+    double matchRadiusPx = 15.;         //!< search radius around a predicted pixel, pixels (ORB-SLAM2: 15 at 640x480)
+    int matchMaxDistance = 100;         //!< Hamming distance accepted at most (ORB-SLAM2 TH_HIGH)
+    double matchRatio = 0.9;            //!< best distance must be below this times the second best (ORB-SLAM2)
+    int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
+    int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
+    bool relocalize = true;             //!< when tracking fails, relocalise in the same map before a new segment
+    double relocalizationTimeout = 3.;  //!< seconds of failed relocalisation before a new segment starts
+    int relocalizationCandidates = 5;   //!< keyframes tried per lost frame, best BoW score first
+    int relocalizationMinInliers = 30;  //!< PnP inliers after refinement to accept a relocalisation
+  };
+
   //! System-wide behaviour.
   struct System {
     Mode mode = modeVoStrict;              //!< see Mode (odometry only until loop closure exists)
@@ -133,14 +160,15 @@ public:
   Tracker tracker;         //!< pose tracking
   Mapper mapper;           //!< window optimisation and point management
   Initializer initializer; //!< monocular initialisation
+  Tracking tracking;       //!< hybrid tracking and relocalisation
   System system;           //!< system-wide behaviour
 
   /*!
     Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.
 
     Format (OpenCV FileStorage YAML, see data/hslam-default.yaml): line 1 is "%YAML:1.0"; one map per section
-    (features, tracker, mapper, initializer, system) whose keys are the member names; booleans are true/false,
-    the mode is its modeName(), vectors are [ 1, 2 ]. Comments go on their own line (OpenCV's reader keeps an
+    (features, tracker, mapper, initializer, tracking, system) whose keys are the member names; booleans are
+    true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on their own line (OpenCV's reader keeps an
     end-of-line comment inside an unquoted word). The whole file is checked before anything is assigned: on error
     the object is unchanged.
     \exception vpHSlamException::fileNotFound, parseError (unknown section or key, repeated key, wrong type,
@@ -161,6 +189,10 @@ public:
   static std::string modeName(Mode mode);
   //! Inverse of modeName(). \exception vpHSlamException::invalidArgument on an unknown name.
   static Mode parseMode(const std::string &name);
+  //! "direct", "indirect", "hybrid".
+  static std::string trackingModeName(TrackingMode mode);
+  //! Inverse of trackingModeName(). \exception vpHSlamException::invalidArgument on an unknown name.
+  static TrackingMode parseTrackingMode(const std::string &name);
 };
 
 #endif
