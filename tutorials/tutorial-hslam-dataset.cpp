@@ -5,6 +5,8 @@
 //! source failed, or when the run was stopped by SIGINT (Ctrl-C), SIGTERM (timeout, systemd, docker stop) or SIGHUP
 //! (the terminal closed); the exit status is then 128 + the signal number, as a shell reports a killed program.
 //! With --skip-unreadable, an image that cannot be decoded is counted as dropped and the run carries on.
+//! Stress runs: --stride K tracks every K-th frame (large motion), --blackout A:B feeds black frames (a covered
+//! lens), --tracking-mode direct|indirect|hybrid selects the tracker. Options and statistics: tutorials/dataset/.
 //!
 //!   ./tutorial-hslam-dataset --input ../shared/data/tsukuba_cg_000-149 --deterministic --no-display
 //!       --trajectory tsukuba.txt --keyframes tsukuba-kf.txt --stats tsukuba.json   (one line)
@@ -22,27 +24,22 @@
 #include <visp3/hslam/vpHSlamRectifier.h>
 #include <visp3/io/vpImageIo.h>
 
-#include <algorithm>
-#include <cmath>
+#include "dataset/DatasetArguments.h"
+#include "dataset/DatasetStatistics.h"
+
 #include <csignal>
 #include <cstdlib>
-#include <fstream>
 #include <functional>
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
-#include <sys/resource.h>
 #include <unistd.h>
-#include <vector>
 
 //! Without a terminal, the progress line is printed once every this many frames.
 constexpr unsigned int kProgressLogEvery = 50;
 
-//! With --skip-unreadable, the run still stops when this many frames in a row cannot be read: the input is then
-//! broken as a whole (a wrong folder, a dead disk), not a frame here and there.
-constexpr unsigned int kMaxConsecutiveUnreadable = 100;
+using namespace hslam_dataset;
 
 namespace
 {
@@ -76,311 +73,6 @@ void installTerminationHandlers()
   }
 }
 
-std::string signalName(int signal)
-{
-  switch (signal) {
-  case SIGINT:
-    return "SIGINT";
-  case SIGTERM:
-    return "SIGTERM";
-  case SIGHUP:
-    return "SIGHUP";
-  default:
-    return "signal " + std::to_string(signal);
-  }
-}
-
-struct Arguments {
-  std::string input;
-  vpHSlamImageSource::Options options;
-  std::string mode = "vo-strict";
-  bool deterministic = false;
-  double speed = 1.; //!< real-time mode: play the sequence at this multiple of its frame rate (0: no pacing)
-  std::string config;
-  std::string trajectory;
-  std::string keyframes;
-  std::string stats;
-  std::string saveConfig;
-  std::string logLevel = "warning";
-  bool display = true;
-  std::string screenshot; //!< PNG of the last view drawn (needs a display)
-  bool quiet = false;
-  bool skipUnreadable = false; //!< count undecodable frames as dropped and carry on (default: stop with the error)
-  bool help = false;
-};
-
-void printUsage(const char *program, std::ostream &out)
-{
-  out << "Usage: " << program
-      << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
-         "       [--camera FILE] [--max-frames N] [--start-frame N] [--fps HZ] [--mode vo-strict]\n"
-         "       [--deterministic] [--speed X] [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt]\n"
-         "       [--keyframes OUT.txt] [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet]\n"
-         "       [--no-display] [--screenshot FILE.png] [--help]\n\n"
-         "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
-         "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
-         "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
-         "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
-         "ends the program at once.\n\n"
-         "  --input PATH       what to read (required)\n"
-         "  --format NAME      input format, detected from PATH's content by default (auto)\n"
-         "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
-         "                     required for image folders and videos unless camera.txt/camera.xml sits beside them\n"
-         "  --max-frames N     stop after N frames (0 = all, default)\n"
-         "  --start-frame N    skip the first N frames (default 0)\n"
-         "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        vo-strict (window only, DSO-like; the only mode implemented so far)\n"
-         "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
-         "                     mapping in its own thread)\n"
-         "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
-         "                     would (default 1; 0 = as fast as possible). Ignored with --deterministic\n"
-         "  --config FILE      settings (YAML, see vpHSlamParameters); command-line options override it;\n"
-         "                     data/hslam-fast.yaml is a real-time preset (DSO defaults otherwise)\n"
-         "  --save-config FILE write the settings in use (YAML)\n"
-         "  --trajectory FILE  every frame with a pose, TUM format (t tx ty tz qx qy qz qw), camera-to-world;\n"
-         "                     when tracking was lost and a new map segment started, FILE.segN.txt per segment too\n"
-         "  --keyframes FILE   keyframe poses, TUM format\n"
-         "  --stats FILE       run statistics as JSON (frames, tracked_frames, keyframes, tracking_ms_median,\n"
-         "                     tracking_ms_p95, mapping_ms_per_keyframe_median, peak_rss_mb,\n"
-         "                     memory_mb_per_keyframe, dropped_frames, wall_s, cpu_s, ...)\n"
-         "  --skip-unreadable  an image that cannot be read or decoded is reported, counted as dropped (in the\n"
-         "                     summary and the statistics) and skipped; tracking carries on with the next frame.\n"
-         "                     Without it (default), the run stops at that image with an error naming it. The run\n"
-         "                     stops anyway after "
-      << kMaxConsecutiveUnreadable
-      << " unreadable frames in a row\n"
-         "  --log-level LEVEL  library messages on stderr: error, warning (default), info, debug\n"
-         "  --quiet            no progress line\n"
-         "  --no-display       do not open a window (also when no X display is available)\n"
-         "  --screenshot FILE  with a window: save the last view shown as a PNG at the end\n"
-         "  --help             this text\n";
-}
-
-unsigned int parseCount(const std::string &option, const std::string &value)
-{
-  std::size_t used = 0;
-  long long n = -1;
-  try {
-    n = std::stoll(value, &used);
-  } catch (const std::exception &) {
-    used = 0;
-  }
-  if (used != value.size() || n < 0 || n > 1000000000LL) {
-    throw vpHSlamException(vpHSlamException::invalidArgument,
-                           option + " expects a non-negative integer, got '" + value + "'");
-  }
-  return static_cast<unsigned int>(n);
-}
-
-double parsePositive(const std::string &option, const std::string &value)
-{
-  std::size_t used = 0;
-  double x = -1.;
-  try {
-    x = std::stod(value, &used);
-  } catch (const std::exception &) {
-    used = 0;
-  }
-  if (used != value.size() || !(x > 0.)) {
-    throw vpHSlamException(vpHSlamException::invalidArgument,
-                           option + " expects a positive number, got '" + value + "'");
-  }
-  return x;
-}
-
-Arguments parseArguments(int argc, const char *const argv[])
-{
-  Arguments args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string option = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) {
-        throw vpHSlamException(vpHSlamException::invalidArgument, option + " needs a value");
-      }
-      return argv[++i];
-    };
-    if (option == "--help" || option == "-h") {
-      args.help = true;
-    } else if (option == "--input") {
-      args.input = value();
-    } else if (option == "--format") {
-      args.options.format = vpHSlamImageSource::parseFormat(value());
-    } else if (option == "--camera") {
-      args.options.cameraFile = value();
-    } else if (option == "--max-frames") {
-      args.options.maxFrames = parseCount(option, value());
-    } else if (option == "--start-frame") {
-      args.options.startFrame = parseCount(option, value());
-    } else if (option == "--fps") {
-      args.options.frameRate = parsePositive(option, value());
-    } else if (option == "--mode") {
-      args.mode = value();
-    } else if (option == "--deterministic") {
-      args.deterministic = true;
-    } else if (option == "--speed") {
-      const std::string text = value();
-      args.speed = text == "0" ? 0. : parsePositive(option, text);
-    } else if (option == "--config") {
-      args.config = value();
-    } else if (option == "--save-config") {
-      args.saveConfig = value();
-    } else if (option == "--trajectory") {
-      args.trajectory = value();
-    } else if (option == "--keyframes") {
-      args.keyframes = value();
-    } else if (option == "--stats") {
-      args.stats = value();
-    } else if (option == "--log-level") {
-      args.logLevel = value();
-    } else if (option == "--quiet") {
-      args.quiet = true;
-    } else if (option == "--no-display") {
-      args.display = false;
-    } else if (option == "--screenshot") {
-      args.screenshot = value();
-    } else if (option == "--skip-unreadable") {
-      args.skipUnreadable = true;
-    } else {
-      throw vpHSlamException(vpHSlamException::invalidArgument, "unknown option '" + option + "' (see --help)");
-    }
-  }
-  if (!args.help && args.input.empty()) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, "--input PATH is required (see --help)");
-  }
-  return args;
-}
-
-//! Settings: defaults, then --config, then the command line.
-vpHSlamParameters makeParameters(const Arguments &args)
-{
-  vpHSlamParameters params;
-  if (!args.config.empty()) {
-    params.load(args.config);
-  }
-  const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
-  if (mode != vpHSlamParameters::modeVoStrict) {
-    throw vpHSlamException(vpHSlamException::unsupported,
-                           "--mode " + args.mode +
-                               ": not implemented yet; only vo-strict (window-only odometry) is available for now");
-  }
-  params.system.mode = mode;
-  if (args.deterministic) {
-    params.system.deterministic = true;
-  }
-  params.validate();
-  return params;
-}
-
-std::string jsonNumber(double x)
-{
-  if (!std::isfinite(x)) {
-    return "null";
-  }
-  std::ostringstream s;
-  s << std::setprecision(10) << x;
-  return s.str();
-}
-
-//! How a run ended, besides what vpHSlam::Statistics says.
-struct RunOutcome {
-  double wallS = 0.;
-  double cpuS = 0.;
-  double videoS = 0.;
-  unsigned int droppedFrames = 0; //!< unreadable frames skipped (--skip-unreadable)
-  int signal = 0;                 //!< termination signal that stopped the run, 0 when none
-  std::string error;              //!< error that stopped the run, empty when none
-};
-
-void writeStats(const std::string &path, const vpHSlam::Statistics &s, const std::string &input,
-                const RunOutcome &outcome, double peakRssMb, bool deterministic)
-{
-  const std::string &error = outcome.error;
-  const double wallS = outcome.wallS, cpuS = outcome.cpuS, videoS = outcome.videoS;
-  std::ofstream out(path.c_str());
-  if (!out) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot write the statistics file '" + path + "'");
-  }
-  const unsigned int held = std::max(1u, s.keyframesHeld);
-  std::string escapedError;
-  for (char c : error) {
-    if (c == '"' || c == '\\') {
-      escapedError += '\\';
-    }
-    escapedError += (c == '\n' ? ' ' : c);
-  }
-  std::string escapedInput;
-  for (char c : input) {
-    if (c == '"' || c == '\\') {
-      escapedInput += '\\';
-    }
-    escapedInput += c;
-  }
-  out << "{\n"
-      << "  \"input\": \"" << escapedInput << "\",\n"
-      << "  \"deterministic\": " << (deterministic ? "true" : "false") << ",\n"
-      << "  \"frames\": " << s.frames << ",\n"
-      << "  \"dropped_frames\": " << outcome.droppedFrames << ",\n"
-      << "  \"tracked_frames\": " << s.trackedFrames << ",\n"
-      << "  \"tracked_share\": " << jsonNumber(s.frames ? double(s.trackedFrames) / s.frames : 0.) << ",\n"
-      << "  \"lost_frames\": " << s.lostFrames << ",\n"
-      << "  \"segments\": " << s.segments << ",\n"
-      << "  \"keyframes\": " << s.keyframes << ",\n"
-      << "  \"mapping_skipped_frames\": " << s.mappingSkippedFrames << ",\n"
-      << "  \"tracking_ms_median\": " << jsonNumber(s.trackingMsMedian) << ",\n"
-      << "  \"tracking_ms_p95\": " << jsonNumber(s.trackingMsP95) << ",\n"
-      << "  \"tracking_ms_max\": " << jsonNumber(s.trackingMsMax) << ",\n"
-      << "  \"initialization_ms_median\": " << jsonNumber(s.initializationMsMedian) << ",\n"
-      << "  \"mapping_ms_per_keyframe_median\": " << jsonNumber(s.mappingMsPerKeyframeMedian) << ",\n"
-      << "  \"mapping_ms_per_keyframe_p95\": " << jsonNumber(s.mappingMsPerKeyframeP95) << ",\n"
-      << "  \"mapping_ms_per_frame_median\": " << jsonNumber(s.mappingMsPerFrameMedian) << ",\n"
-      << "  \"active_points\": " << s.activePoints << ",\n"
-      << "  \"peak_rss_mb\": " << jsonNumber(peakRssMb) << ",\n"
-      << "  \"map_memory_mb\": " << jsonNumber(s.mapMemoryMb) << ",\n"
-      << "  \"memory_mb_per_keyframe\": " << jsonNumber(s.mapMemoryMb / held) << ",\n"
-      << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
-      << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"
-      << "  \"video_s\": " << jsonNumber(videoS) << ",\n"
-      << "  \"realtime_factor\": " << jsonNumber(wallS > 0. ? videoS / wallS : 0.) << ",\n"
-      << "  \"interrupted\": " << (outcome.signal != 0 ? "true" : "false") << ",\n"
-      << "  \"signal\": " << (outcome.signal != 0 ? "\"" + signalName(outcome.signal) + "\"" : std::string("null"))
-      << ",\n"
-      << "  \"error\": " << (error.empty() ? std::string("null") : "\"" + escapedError + "\"") << "\n"
-      << "}\n";
-  out.flush();
-  if (!out) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot write the statistics file '" + path + "'");
-  }
-}
-
-//! Peak resident memory of this process from /proc/self/status (VmHWM), MB; 0 when unavailable.
-double peakRssMb()
-{
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.compare(0, 6, "VmHWM:") == 0) {
-      std::istringstream in(line.substr(6));
-      double kb = 0.;
-      if (in >> kb) {
-        return kb / 1024.;
-      }
-    }
-  }
-  return 0.;
-}
-
-//! CPU time (user + system) used by this process so far, seconds.
-double processCpuSeconds()
-{
-  rusage usage{};
-  if (getrusage(RUSAGE_SELF, &usage) != 0) {
-    return 0.;
-  }
-  constexpr double kMicro = 1e-6;
-  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-         kMicro * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
-
 //! Write every requested output; report (do not throw) failures so that each file gets its chance.
 bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &outcome)
 {
@@ -408,9 +100,7 @@ bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &
     attempt(args.keyframes, [&]() { slam.getKeyframeTrajectory().saveTum(args.keyframes); });
   }
   if (!args.stats.empty()) {
-    attempt(args.stats, [&]() {
-      writeStats(args.stats, stats, args.input, outcome, peakRssMb(), slam.getParameters().system.deterministic);
-    });
+    attempt(args.stats, [&]() { writeStats(args.stats, stats, args, slam.getParameters(), outcome); });
   }
   return ok;
 }
@@ -430,9 +120,17 @@ int run(const Arguments &args)
   std::cout << "source: " << source->describe() << std::endl;
   std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
   vpHSlam slam(*source, params);
-  std::cout << "mode: " << vpHSlamParameters::modeName(params.system.mode)
+  std::cout << "mode: " << vpHSlamParameters::modeName(params.system.mode) << ", "
+            << vpHSlamParameters::trackingModeName(params.tracking.mode) << " tracking"
             << (params.system.deterministic ? ", deterministic" : ", real time") << "; rectified " << slam.getWidth()
             << "x" << slam.getHeight() << std::endl;
+  if (args.stride > 1) {
+    std::cout << "stride " << args.stride << ": tracking frames 0, " << args.stride << ", " << 2 * args.stride
+              << ", ... of the source" << std::endl;
+  }
+  if (args.blackout) {
+    std::cout << "blackout: frames " << args.blackoutFrames.text() << " replaced by a black image" << std::endl;
+  }
 
   bool display = args.display;
 #if defined(VISP_HAVE_X11)
@@ -453,10 +151,11 @@ int run(const Arguments &args)
   const int frameCount = source->getFrameCount();
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
-  double firstTimestamp = 0., lastTimestamp = 0.;
-  unsigned int framesRead = 0;
-  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
   RunOutcome outcome;
+  double firstTimestamp = 0., lastTimestamp = 0.;
+  unsigned int &framesRead = outcome.framesRead;
+  unsigned int framesFed = 0;
+  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
   std::string &error = outcome.error;
   unsigned int consecutiveUnreadable = 0;
   const double t0 = vpTime::measureTimeMs();
@@ -484,6 +183,16 @@ int run(const Arguments &args)
       }
       lastTimestamp = frame.timestamp;
       ++framesRead;
+      // --stride and --blackout go by the source's numbering (after --start-frame; an unreadable frame dropped by
+      // --skip-unreadable keeps its number), so a run with dropped frames still tracks the same frames.
+      if (!args.feeds(frame.index)) {
+        continue;
+      }
+      if (args.blacksOut(frame.index)) {
+        I = 0; // a covered lens: same size, same timestamp and exposure
+        ++outcome.blackedOutFrames;
+      }
+      ++framesFed;
       if (!params.system.deterministic && args.speed > 0.) {
         // A recorded sequence played like a live camera: frame i is not available before its time.
         const double dueMs = t0 + 1000. * (frame.timestamp - firstTimestamp) / args.speed;
@@ -495,7 +204,7 @@ int run(const Arguments &args)
       const vpHSlam::State state = slam.track(I, frame.timestamp, frame.exposure);
       // On a terminal the progress line rewrites itself; in a log (CI, a file) it becomes one line every
       // kProgressLogEvery frames so the log stays readable.
-      if (!args.quiet && (progressOnTerminal || framesRead % kProgressLogEvery == 0)) {
+      if (!args.quiet && (progressOnTerminal || framesFed % kProgressLogEvery == 0)) {
         const vpHSlam::Statistics s = slam.getStatistics();
         std::cerr << (progressOnTerminal ? "\r" : "") << "frame " << frame.index + 1;
         if (frameCount > 0) {
@@ -516,7 +225,8 @@ int run(const Arguments &args)
           fps = fps > 0. ? 0.9 * fps + 0.1 * instantFps : instantFps;
         }
         lastDrawMs = now;
-        view.draw(slam, frame.index, fps, canvas, "space: pause  q: quit");
+        view.draw(slam, frame.index, fps, canvas,
+                  args.blacksOut(frame.index) ? "blackout  q: quit" : "space: pause  q: quit");
         if (!windowOpen) {
           try {
             window.init(canvas, 0, 0, "H-SLAM");
@@ -593,10 +303,17 @@ int run(const Arguments &args)
   std::cout << "frames: " << s.frames << ", tracked: " << s.trackedFrames << " (" << std::fixed << std::setprecision(1)
             << (s.frames ? 100. * s.trackedFrames / s.frames : 0.) << " %), lost: " << s.lostFrames
             << ", segments: " << s.segments << ", keyframes: " << s.keyframes
-            << (args.skipUnreadable ? ", dropped (unreadable): " + std::to_string(outcome.droppedFrames) : "") << "\n"
+            << (args.skipUnreadable ? ", dropped (unreadable): " + std::to_string(outcome.droppedFrames) : "")
+            << (args.stride > 1 ? ", read: " + std::to_string(framesRead) : "")
+            << (args.blackout ? ", blacked out: " + std::to_string(outcome.blackedOutFrames) : "") << "\n"
             << "tracking: " << std::setprecision(2) << s.trackingMsMedian << " ms median, " << s.trackingMsP95
-            << " ms p95; mapping: " << s.mappingMsPerKeyframeMedian << " ms per keyframe (median)\n"
-            << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
+            << " ms p95; mapping: " << s.mappingMsPerKeyframeMedian << " ms per keyframe (median)\n";
+  if (params.tracking.mode != vpHSlamParameters::trackingDirect) {
+    std::cout << "ORB: " << s.orbMatchesMedian << " matches, " << s.orbInliersMedian << " inliers (medians); K "
+              << s.geometricWeightMedian << "; relocalisations " << s.relocalizationsSucceeded << "/"
+              << s.relocalizationsAttempted << "\n";
+  }
+  std::cout << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
             << (wallS > 0. ? videoS / wallS : 0.) << "x real time), CPU " << cpuS << " s; peak memory "
             << std::setprecision(1) << peakRssMb() << " MB" << std::endl;
   if (s.segments > 1) {

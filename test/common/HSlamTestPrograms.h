@@ -1,11 +1,16 @@
-// Test helpers for end-to-end tests: find a built tutorial program and run it, capturing its output.
+// Test helpers for end-to-end tests: find a built tutorial program, run it capturing its output, and read the
+// files it wrote (statistics JSON, TUM trajectories).
 // Programs are found relative to the running test executable (<build>/test/ -> <build>/tutorials/).
 #ifndef HSLAM_TEST_PROGRAMS_H
 #define HSLAM_TEST_PROGRAMS_H
 
 #include "HSlamTestData.h"
 
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
 #include <string>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -48,6 +53,50 @@ inline ProgramRun runProgram(const std::string &program, const std::string &argu
   const int status = ::pclose(pipe);
   result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return result;
+}
+
+//! Whole content of a text file, empty when it cannot be read.
+inline std::string readTextFile(const std::string &path)
+{
+  std::ifstream in(path.c_str());
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+//! Value of "key": <number> in a flat JSON object (a statistics file), NaN when absent or not a number.
+inline double jsonNumber(const std::string &json, const std::string &key)
+{
+  const std::string tag = "\"" + key + "\":";
+  const std::size_t pos = json.find(tag);
+  if (pos == std::string::npos) {
+    return std::nan("");
+  }
+  const char *begin = json.c_str() + pos + tag.size();
+  char *end = nullptr;
+  const double x = std::strtod(begin, &end);
+  return end == begin ? std::nan("") : x;
+}
+
+//! Value of "key": "<text>" in a flat JSON object (no escapes inside), "<absent>" when there is no such string.
+inline std::string jsonString(const std::string &json, const std::string &key)
+{
+  const std::string tag = "\"" + key + "\": \"";
+  const std::size_t pos = json.find(tag);
+  const std::size_t end = pos == std::string::npos ? pos : json.find('"', pos + tag.size());
+  return end == std::string::npos ? std::string("<absent>") : json.substr(pos + tag.size(), end - pos - tag.size());
+}
+
+//! Pose lines of a TUM trajectory file (comments and blank lines excluded).
+inline std::size_t countTumPoses(const std::string &path)
+{
+  std::ifstream in(path.c_str());
+  std::string line;
+  std::size_t n = 0;
+  while (std::getline(in, line)) {
+    n += (!line.empty() && line[0] != '#') ? 1 : 0;
+  }
+  return n;
 }
 } // namespace hslam_test
 

@@ -9,11 +9,14 @@
 #include <visp3/core/vpMeterPixelConversion.h>
 #include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamParameters.h>
 
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <string>
+#include <vector>
 
 namespace
 {
@@ -22,12 +25,16 @@ constexpr unsigned int kMinTopViewWidth = 64;
 constexpr unsigned int kFontHeight = 16;
 constexpr unsigned int kStatusBand = 22; //!< height of the dark band behind the status line, pixels
 constexpr int kPointRadius = 2;
-constexpr double kMarginFraction = 0.08; //!< top view: free border around the trajectory
+constexpr unsigned int kMatchCrossSize = 7; //!< descriptor matches: cross width and height, pixels
+constexpr double kMarginFraction = 0.08;    //!< top view: free border around the trajectory
 const vpColor kPanelBackground(32, 32, 32);
 const vpColor kTrajectoryColour(60, 200, 60);
 const vpColor kKeyframeColour(80, 140, 255);
 const vpColor kCameraColour(255, 60, 60);
 const vpColor kTextColour(255, 255, 255);
+//! Descriptor matches: magenta, a hue the inverse-depth ramp of the points (blue, cyan, green, yellow, red) never
+//! takes.
+const vpColor kMatchColour(255, 0, 255);
 
 //! ViSP's bitmap font (its TrueType path is unreliable in 3.5, see TrajectoryPlot.cpp).
 vpFont &font()
@@ -80,6 +87,18 @@ void drawPoints(const vpHSlam &slam, vpImage<vpRGBa> &canvas)
   for (std::size_t k = 0; k < pixels.size(); ++k) {
     const vpRGBa c = vpHSlamLiveView::inverseDepthColor((idepths[k] - lo) / range);
     vpImageDraw::drawCircle(canvas, pixels[k], kPointRadius, vpColor(c.R, c.G, c.B), 2);
+  }
+}
+
+//! The keypoints matched by ORB descriptor in the last frame (rectified pixels, as the image): one cross each.
+void drawDescriptorMatches(const std::vector<vpImagePoint> &matches, vpImage<vpRGBa> &canvas, unsigned int width,
+                           unsigned int height)
+{
+  for (const vpImagePoint &ip : matches) {
+    if (ip.get_u() < 0 || ip.get_v() < kStatusBand || ip.get_u() >= width || ip.get_v() >= height) {
+      continue;
+    }
+    vpImageDraw::drawCross(canvas, ip, kMatchCrossSize, kMatchColour, 1);
   }
 }
 
@@ -178,6 +197,10 @@ void vpHSlamLiveView::draw(const vpHSlam &slam, unsigned int frameIndex, double 
   if (slam.getState() == vpHSlam::stateTracking) {
     drawPoints(slam, canvas);
   }
+  // Empty in direct mode and for a frame not tracked; drawn over the points, whose markers they may share.
+  const std::vector<vpImagePoint> matches = slam.getDescriptorMatches();
+  drawDescriptorMatches(matches, canvas, w, h);
+
   const vpHSlam::Statistics s = slam.getStatistics();
   std::ostringstream status;
   status << "frame " << frameIndex << "  " << vpHSlam::stateName(slam.getState());
@@ -185,12 +208,21 @@ void vpHSlamLiveView::draw(const vpHSlam &slam, unsigned int frameIndex, double 
     status << "  " << std::fixed << std::setprecision(1) << fps << " fps";
   }
   status << "  pts " << s.activePoints << "  kf " << s.keyframes;
-  if (!hint.empty()) {
-    status << "  " << hint;
-  }
   fill(canvas, 0, 0, w, kStatusBand, vpColor(0, 0, 0));
-  font().drawText(canvas, status.str(), vpImagePoint(3, 6),
-                  slam.getState() == vpHSlam::stateLost ? kCameraColour : kTextColour);
+  // The status line in three pieces: its matches legend is written in the colour of their crosses.
+  const vpColor statusColour = slam.getState() == vpHSlam::stateLost ? kCameraColour : kTextColour;
+  vpImagePoint position(3, 6);
+  auto write = [&](const std::string &text, const vpColor &colour) {
+    font().drawText(canvas, text, position, colour);
+    position.set_j(position.get_j() + font().getMeasure(text).get_j());
+  };
+  write(status.str(), statusColour);
+  if (slam.getParameters().tracking.mode != vpHSlamParameters::trackingDirect) {
+    write("  + orb " + std::to_string(matches.size()), kMatchColour);
+  }
+  if (!hint.empty()) {
+    write("  " + hint, statusColour);
+  }
   if (m_topViewWidth > 0) {
     drawTopView(slam, canvas, w, m_topViewWidth);
   }

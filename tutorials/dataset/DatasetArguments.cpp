@@ -1,0 +1,245 @@
+#include "dataset/DatasetArguments.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <exception>
+
+namespace hslam_dataset
+{
+namespace
+{
+//! Largest count accepted on the command line (frames, stride): far beyond any sequence, well inside unsigned int.
+constexpr long long kMaxCount = 1000000000LL;
+
+//! \e value as an integer in [\e lo, kMaxCount]; false when it is not one (sign, text, overflow, trailing bytes).
+bool readCount(const std::string &value, long long lo, unsigned int &n)
+{
+  std::size_t used = 0;
+  long long x = -1;
+  try {
+    x = std::stoll(value, &used);
+  } catch (const std::exception &) {
+    return false;
+  }
+  // std::stoll skips leading blanks and takes a sign: neither belongs in a count.
+  if (value.empty() || value[0] < '0' || value[0] > '9' || used != value.size() || x < lo || x > kMaxCount) {
+    return false;
+  }
+  n = static_cast<unsigned int>(x);
+  return true;
+}
+
+unsigned int parseCount(const std::string &option, const std::string &value)
+{
+  unsigned int n = 0;
+  if (!readCount(value, 0, n)) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           option + " expects a non-negative integer, got '" + value + "'");
+  }
+  return n;
+}
+
+unsigned int parseStride(const std::string &value)
+{
+  unsigned int n = 0;
+  if (!readCount(value, 1, n)) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--stride expects an integer >= 1 (1 = every frame), got '" + value + "'");
+  }
+  return n;
+}
+
+FrameInterval parseBlackout(const std::string &value)
+{
+  const std::size_t colon = value.find(':');
+  FrameInterval frames;
+  if (colon == std::string::npos || !readCount(value.substr(0, colon), 0, frames.first) ||
+      !readCount(value.substr(colon + 1), 0, frames.last) || frames.first > frames.last) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--blackout expects A:B, two frame indices with 0 <= A <= B (e.g. 120:160), got '" + value +
+                               "'");
+  }
+  return frames;
+}
+
+//! Refused here, before the (maybe long) opening of the source, with the option's name.
+void checkTrackingMode(const std::string &value)
+{
+  try {
+    vpHSlamParameters::parseTrackingMode(value);
+  } catch (const vpHSlamException &) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--tracking-mode expects direct, indirect or hybrid, got '" + value + "'");
+  }
+}
+
+double parsePositive(const std::string &option, const std::string &value)
+{
+  std::size_t used = 0;
+  double x = -1.;
+  try {
+    x = std::stod(value, &used);
+  } catch (const std::exception &) {
+    used = 0;
+  }
+  if (used != value.size() || !(x > 0.)) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           option + " expects a positive number, got '" + value + "'");
+  }
+  return x;
+}
+} // namespace
+
+void printUsage(const char *program, std::ostream &out)
+{
+  out << "Usage: " << program
+      << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
+         "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--fps HZ]\n"
+         "       [--mode vo-strict] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed X]\n"
+         "       [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt] [--keyframes OUT.txt]\n"
+         "       [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
+         "       [--screenshot FILE.png] [--help]\n\n"
+         "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
+         "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
+         "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
+         "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
+         "ends the program at once.\n\n"
+         "  --input PATH       what to read (required)\n"
+         "  --format NAME      input format, detected from PATH's content by default (auto)\n"
+         "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
+         "                     required for image folders and videos unless camera.txt/camera.xml sits beside them\n"
+         "  --max-frames N     stop after N frames READ from the source (0 = all, default); with --stride K,\n"
+         "                     ceil(N / K) of them are tracked\n"
+         "  --start-frame N    skip the first N frames (default 0); the frame after them is frame 0 for\n"
+         "                     --stride and --blackout\n"
+         "  --stride K         track only frames 0, K, 2K, ... of the source (default 1: all), to simulate a\n"
+         "                     K times larger motion between frames; the others are read and skipped\n"
+         "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
+         "                     and timestamp: a covered lens (default: none)\n"
+         "  --fps HZ           frame rate of image folders and videos (default 30)\n"
+         "  --mode NAME        vo-strict (window only, DSO-like; the only mode implemented so far)\n"
+         "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
+         "                     default: tracking.mode of --config, else hybrid\n"
+         "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
+         "                     mapping in its own thread)\n"
+         "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
+         "                     would (default 1; 0 = as fast as possible). Ignored with --deterministic\n"
+         "  --config FILE      settings (YAML, see vpHSlamParameters); command-line options override it;\n"
+         "                     data/hslam-fast.yaml is a real-time preset (DSO defaults otherwise)\n"
+         "  --save-config FILE write the settings in use (YAML)\n"
+         "  --trajectory FILE  every frame with a pose, TUM format (t tx ty tz qx qy qz qw), camera-to-world;\n"
+         "                     when tracking was lost and a new map segment started, FILE.segN.txt per segment too\n"
+         "  --keyframes FILE   keyframe poses, TUM format\n"
+         "  --stats FILE       run statistics as JSON: frames (given to tracking), frames_read, tracked_frames,\n"
+         "                     keyframes, segments, tracking_ms_median, tracking_ms_p95,\n"
+         "                     mapping_ms_per_keyframe_median, peak_rss_mb, memory_mb_per_keyframe, dropped_frames,\n"
+         "                     wall_s, cpu_s, hybrid tracking (orb_matches_median, orb_inliers_median,\n"
+         "                     geometric_weight_median, relocalizations_attempted, relocalizations_succeeded,\n"
+         "                     descriptor_kb_per_keyframe), the run's tracking_mode, stride, blackout (\"A:B\" or\n"
+         "                     \"\") and blacked_out_frames, ...\n"
+         "  --skip-unreadable  an image that cannot be read or decoded is reported, counted as dropped (in the\n"
+         "                     summary and the statistics) and skipped; tracking carries on with the next frame.\n"
+         "                     Without it (default), the run stops at that image with an error naming it. The run\n"
+         "                     stops anyway after "
+      << kMaxConsecutiveUnreadable
+      << " unreadable frames in a row\n"
+         "  --log-level LEVEL  library messages on stderr: error, warning (default), info, debug\n"
+         "  --quiet            no progress line\n"
+         "  --no-display       do not open a window (also when no X display is available)\n"
+         "  --screenshot FILE  with a window: save the last view shown as a PNG at the end\n"
+         "  --help             this text\n";
+}
+
+Arguments parseArguments(int argc, const char *const argv[])
+{
+  Arguments args;
+  for (int i = 1; i < argc; ++i) {
+    const std::string option = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) {
+        throw vpHSlamException(vpHSlamException::invalidArgument, option + " needs a value");
+      }
+      return argv[++i];
+    };
+    if (option == "--help" || option == "-h") {
+      args.help = true;
+    } else if (option == "--input") {
+      args.input = value();
+    } else if (option == "--format") {
+      args.options.format = vpHSlamImageSource::parseFormat(value());
+    } else if (option == "--camera") {
+      args.options.cameraFile = value();
+    } else if (option == "--max-frames") {
+      args.options.maxFrames = parseCount(option, value());
+    } else if (option == "--start-frame") {
+      args.options.startFrame = parseCount(option, value());
+    } else if (option == "--stride") {
+      args.stride = parseStride(value());
+    } else if (option == "--blackout") {
+      args.blackoutFrames = parseBlackout(value());
+      args.blackout = true;
+    } else if (option == "--fps") {
+      args.options.frameRate = parsePositive(option, value());
+    } else if (option == "--mode") {
+      args.mode = value();
+    } else if (option == "--tracking-mode") {
+      args.trackingMode = value();
+      checkTrackingMode(args.trackingMode);
+    } else if (option == "--deterministic") {
+      args.deterministic = true;
+    } else if (option == "--speed") {
+      const std::string text = value();
+      args.speed = text == "0" ? 0. : parsePositive(option, text);
+    } else if (option == "--config") {
+      args.config = value();
+    } else if (option == "--save-config") {
+      args.saveConfig = value();
+    } else if (option == "--trajectory") {
+      args.trajectory = value();
+    } else if (option == "--keyframes") {
+      args.keyframes = value();
+    } else if (option == "--stats") {
+      args.stats = value();
+    } else if (option == "--log-level") {
+      args.logLevel = value();
+    } else if (option == "--quiet") {
+      args.quiet = true;
+    } else if (option == "--no-display") {
+      args.display = false;
+    } else if (option == "--screenshot") {
+      args.screenshot = value();
+    } else if (option == "--skip-unreadable") {
+      args.skipUnreadable = true;
+    } else {
+      throw vpHSlamException(vpHSlamException::invalidArgument, "unknown option '" + option + "' (see --help)");
+    }
+  }
+  if (!args.help && args.input.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "--input PATH is required (see --help)");
+  }
+  return args;
+}
+
+vpHSlamParameters makeParameters(const Arguments &args)
+{
+  vpHSlamParameters params;
+  if (!args.config.empty()) {
+    params.load(args.config);
+  }
+  const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
+  if (mode != vpHSlamParameters::modeVoStrict) {
+    throw vpHSlamException(vpHSlamException::unsupported,
+                           "--mode " + args.mode +
+                               ": not implemented yet; only vo-strict (window-only odometry) is available for now");
+  }
+  params.system.mode = mode;
+  if (!args.trackingMode.empty()) {
+    params.tracking.mode = vpHSlamParameters::parseTrackingMode(args.trackingMode);
+  }
+  if (args.deterministic) {
+    params.system.deterministic = true;
+  }
+  params.validate();
+  return params;
+}
+} // namespace hslam_dataset

@@ -1,0 +1,165 @@
+#!/usr/bin/env bash
+# Direct, indirect and hybrid tracking compared on the shared real sequences (the paper's ablation), under large
+# inter-frame motion, and with the lens covered for a while.
+#
+#   bash tutorials/hslam-hybrid-benchmark.sh [BUILD_DIR] [-- extra options for tutorial-hslam-dataset]
+#   e.g. bash tutorials/hslam-hybrid-benchmark.sh build -- --config data/hslam-fast.yaml
+#
+# Every run is one deterministic run of tutorial-hslam-dataset (--deterministic --no-display --quiet, then the extra
+# options), evaluated with tutorial-hslam-evaluate (Sim(3)-aligned ATE of every frame with a pose; after a loss the
+# segments, which have scales of their own, are aligned together, so a loss shows in the ATE). Sections:
+#   ablation  per sequence and tracking mode: tracked/frames, segments, ATE, tracking ms median and p95, ORB matches
+#             and inliers (medians), K (geometric weight of eq. 4, median)
+#   stride    large motion: tracked/frames and ATE per mode with --stride K for each K of STRIDES
+#   blackout  covered lens: BLACKOUT_SEQUENCE with --blackout BLACKOUT per mode, against the uninterrupted run:
+#             segments, tracked/frames, relocalisations attempted/succeeded, ATE
+# A run that fails prints a line naming its log and the benchmark carries on (the exit status is then 1). Per-run
+# files go to $OUT.
+# Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-hybrid-bench), SEQUENCES
+# (space-separated folder names), MODES (default "direct indirect hybrid"), STRIDES (default "1 2 3 4 5 6 7 8"),
+# SECTIONS (default "ablation stride blackout"), BLACKOUT_SEQUENCE (default 7scenes_redkitchen_000-299), BLACKOUT
+# (default 120:160).
+set -uo pipefail # not -e: one failed run must not end the benchmark
+
+repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="$repo/build"
+if [[ $# -ge 1 && "$1" != "--" ]]; then
+  build="$1"
+  shift
+fi
+if [[ "${1:-}" == "--" ]]; then shift; fi
+extra=("$@")
+data="${DATA:-$repo/../shared/data}"
+out="${OUT:-/tmp/hslam-hybrid-bench}"
+sequences="${SEQUENCES:-7scenes_redkitchen_000-299 tsukuba_cg_000-149 kitti06_000-050}"
+modes="${MODES:-direct indirect hybrid}"
+strides="${STRIDES:-1 2 3 4 5 6 7 8}"
+sections="${SECTIONS:-ablation stride blackout}"
+blackout_sequence="${BLACKOUT_SEQUENCE:-7scenes_redkitchen_000-299}"
+blackout="${BLACKOUT:-120:160}"
+dataset="$build/tutorials/tutorial-hslam-dataset"
+evaluate="$build/tutorials/tutorial-hslam-evaluate"
+for program in "$dataset" "$evaluate"; do
+  [[ -x "$program" ]] || { echo "error: $program not built (cmake --build $build --target $(basename "$program"))" >&2; exit 1; }
+done
+mkdir -p "$out" || exit 1
+
+groundtruth() {
+  case "$1" in
+    kitti*) echo "$data/$1/groundtruth_tum.txt" ;;
+    euroc*) echo "$data/$1/groundtruth_cam0_tum.txt" ;;
+    *) echo "$data/$1/groundtruth.txt" ;;
+  esac
+}
+
+json() { # json FILE KEY -> the value (strings without their quotes), "nan" when absent
+  local value
+  value="$(sed -n "s/^ *\"$2\": *\([^,]*\),\{0,1\}$/\1/p" "$1" 2>/dev/null | head -n 1 | tr -d '"')"
+  [[ -z "$value" || "$value" == null ]] && value=nan
+  echo "$value"
+}
+
+has_section() { [[ " $sections " == *" $1 "* ]]; }
+
+# run PREFIX SEQUENCE OPTIONS...: one run and its evaluation; files PREFIX.{txt,json,log,ate}. A run already made by
+# this invocation (same prefix) is reused. Returns non-zero, after printing a line, when the run failed.
+declare -A made=()
+failures=0
+run() {
+  local prefix="$1" seq="$2"
+  shift 2
+  if [[ -n "${made[$prefix]:-}" ]]; then
+    return "${made[$prefix]}"
+  fi
+  rm -f "$prefix.txt" "$prefix.json" "$prefix.ate"
+  local status=0
+  "$dataset" --input "$data/$seq" --deterministic --no-display --quiet --trajectory "$prefix.txt" \
+    --stats "$prefix.json" "$@" "${extra[@]}" > "$prefix.log" 2>&1 || status=$?
+  if [[ $status -ne 0 || ! -s "$prefix.json" ]]; then
+    echo "$seq $*: tutorial-hslam-dataset failed (exit $status), see $prefix.log"
+    made[$prefix]=1
+    failures=$((failures + 1))
+    return 1
+  fi
+  local ate
+  ate="$("$evaluate" --groundtruth "$(groundtruth "$seq")" --estimate "$prefix.txt" 2>/dev/null | sed -n "s/^ate_rmse_m=//p")"
+  echo "${ate:-nan}" > "$prefix.ate"
+  made[$prefix]=0
+  return 0
+}
+
+tracked() { echo "$(json "$1.json" tracked_frames)/$(json "$1.json" frames)"; }
+ate() { cat "$1.ate" 2>/dev/null || echo nan; }
+
+available=()
+for seq in $sequences; do
+  if [[ -d "$data/$seq" ]]; then available+=("$seq"); else echo "$seq: not found under $data, skipped"; fi
+done
+
+if has_section ablation; then
+  echo "== ablation: one deterministic run per tracking mode"
+  printf "%-28s %-8s %9s %4s %9s %7s %7s %7s %7s %6s\n" sequence mode tracked seg ate trk_ms trk_p95 orb_mat orb_inl K
+  for seq in "${available[@]}"; do
+    for mode in $modes; do
+      prefix="$out/$seq.$mode.k1"
+      run "$prefix" "$seq" --tracking-mode "$mode" || continue
+      printf "%-28s %-8s %9s %4s %9.4f %7.2f %7.2f %7.0f %7.0f %6.3f\n" "$seq" "$mode" "$(tracked "$prefix")" \
+        "$(json "$prefix.json" segments)" "$(ate "$prefix")" "$(json "$prefix.json" tracking_ms_median)" \
+        "$(json "$prefix.json" tracking_ms_p95)" "$(json "$prefix.json" orb_matches_median)" \
+        "$(json "$prefix.json" orb_inliers_median)" "$(json "$prefix.json" geometric_weight_median)"
+    done
+  done
+  echo
+fi
+
+if has_section stride; then
+  echo "== large motion: every K-th frame tracked (--stride K); tracked/frames and ATE per mode"
+  printf "%-28s %2s" sequence K
+  for mode in $modes; do printf "  %-18s" "$mode"; done
+  echo
+  for seq in "${available[@]}"; do
+    for k in $strides; do
+      line="$(printf "%-28s %2s" "$seq" "$k")"
+      for mode in $modes; do
+        prefix="$out/$seq.$mode.k$k"
+        if run "$prefix" "$seq" --tracking-mode "$mode" --stride "$k"; then
+          line+="$(printf "  %9s %8.4f" "$(tracked "$prefix")" "$(ate "$prefix")")"
+        else
+          line+="$(printf "  %18s" failed)"
+        fi
+      done
+      echo "$line"
+    done
+  done
+  echo
+fi
+
+if has_section blackout; then
+  echo "== covered lens: $blackout_sequence, frames $blackout black, against the uninterrupted run"
+  if [[ -d "$data/$blackout_sequence" ]]; then
+    printf "%-8s %-13s %4s %9s %11s %9s\n" mode run seg tracked reloc_ok/try ate
+    for mode in $modes; do
+      for variant in uninterrupted blackout; do
+        prefix="$out/$blackout_sequence.$mode.k1"
+        options=(--tracking-mode "$mode")
+        if [[ $variant == blackout ]]; then
+          prefix="$out/$blackout_sequence.$mode.blackout"
+          options+=(--blackout "$blackout")
+        fi
+        run "$prefix" "$blackout_sequence" "${options[@]}" || continue
+        printf "%-8s %-13s %4s %9s %11s %9.4f\n" "$mode" "$variant" "$(json "$prefix.json" segments)" \
+          "$(tracked "$prefix")" \
+          "$(json "$prefix.json" relocalizations_succeeded)/$(json "$prefix.json" relocalizations_attempted)" \
+          "$(ate "$prefix")"
+      done
+    done
+  else
+    echo "$blackout_sequence: not found under $data, skipped"
+  fi
+  echo
+fi
+echo "(ATE in ground-truth units: metres, Tsukuba centimetres; K: geometric weight, eq. 4; files in $out)"
+if [[ $failures -gt 0 ]]; then
+  echo "$failures run(s) failed"
+  exit 1
+fi
