@@ -453,8 +453,8 @@ TEST(Parameters, ModeNames)
   EXPECT_EQ(vpHSlamParameters::modeName(vpHSlamParameters::modeVoReuse), "vo-reuse");
   EXPECT_EQ(vpHSlamParameters::modeName(vpHSlamParameters::modeSlam), "slam");
   ExpectError([] { vpHSlamParameters::parseMode("SLAM"); }, vpHSlamException::invalidArgument, {"SLAM"});
-  for (vpHSlamParameters::TrackingMode mode : {vpHSlamParameters::trackingDirect, vpHSlamParameters::trackingIndirect,
-                                               vpHSlamParameters::trackingHybrid}) {
+  for (vpHSlamParameters::TrackingMode mode :
+       {vpHSlamParameters::trackingDirect, vpHSlamParameters::trackingIndirect, vpHSlamParameters::trackingHybrid}) {
     EXPECT_EQ(vpHSlamParameters::parseTrackingMode(vpHSlamParameters::trackingModeName(mode)), mode);
   }
   EXPECT_EQ(vpHSlamParameters::trackingModeName(vpHSlamParameters::trackingHybrid), "hybrid");

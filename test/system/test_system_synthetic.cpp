@@ -93,7 +93,9 @@ TEST(SystemSynthetic, RecoversFromLostTrackingWithANewSegment)
 {
   HSLAM_REQUIRE_SYNTHETIC(dir);
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
-  vpHSlam slam(*source, parameters(true));
+  vpHSlamParameters params = parameters(true);
+  params.tracking.relocalize = false; // the fallback: a loss starts a new segment (relocalisation: next test)
+  vpHSlam slam(*source, params);
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
   std::vector<vpHSlam::State> before, blind, after;
@@ -127,4 +129,46 @@ TEST(SystemSynthetic, RecoversFromLostTrackingWithANewSegment)
   EXPECT_EQ(keyframes.back().segment, 1u);
   EXPECT_FALSE(keyframes.front().inWindow);
   EXPECT_TRUE(keyframes.back().inWindow);
+}
+
+TEST(SystemSynthetic, CoveredLensIsRelocalisedInTheSameMap)
+{
+  // The covered lens of the previous test with relocalisation on (the default): the frames after it are matched
+  // to the keyframes seen before (BoW, ORB, PnP) and tracking resumes in the same map and segment.
+  HSLAM_REQUIRE_SYNTHETIC(dir);
+  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
+  vpHSlamParameters params = parameters(true);
+  ASSERT_TRUE(params.tracking.relocalize);
+  ASSERT_EQ(params.tracking.mode, vpHSlamParameters::trackingHybrid);
+  vpHSlam slam(*source, params);
+  vpImage<unsigned char> I;
+  vpHSlamImageSource::Frame frame;
+  std::vector<vpHSlam::State> after;
+  const double dt = 1. / 30.;
+  double t = 0.;
+  int firstTrackedAfter = -1;
+  while (source->acquire(I, frame)) {
+    if (frame.index == 40) {
+      const vpImage<unsigned char> black(I.getHeight(), I.getWidth(), 0);
+      for (int i = 0; i < 10; ++i, t += dt) {
+        slam.track(black, t);
+      }
+    }
+    const vpHSlam::State state = slam.track(I, t);
+    if (frame.index >= 40) {
+      after.push_back(state);
+      if (state == vpHSlam::stateTracking && firstTrackedAfter < 0) {
+        firstTrackedAfter = static_cast<int>(frame.index) - 40;
+      }
+    }
+    t += dt;
+  }
+  const vpHSlam::Statistics stats = slam.getStatistics();
+  EXPECT_EQ(stats.segments, 1u) << "relocalised in the same map, no new segment";
+  EXPECT_GE(stats.relocalizationsAttempted, 1u);
+  EXPECT_EQ(stats.relocalizationsSucceeded, 1u);
+  ASSERT_GE(firstTrackedAfter, 0);
+  EXPECT_LE(firstTrackedAfter, 10) << "tracking back within 10 frames of the images returning";
+  EXPECT_EQ(after.back(), vpHSlam::stateTracking);
+  EXPECT_GE(stats.lostFrames, 1u);
 }

@@ -10,7 +10,7 @@
 namespace
 {
 using hslam::PinholeIntrinsics;
-using hslam::PointObservation;
+using hslam::ReprojectionObservation;
 using hslam::SE3d;
 
 const PinholeIntrinsics kK{500., 500., 319.5, 239.5};
@@ -29,18 +29,18 @@ double rotationErrorDeg(const SE3d &a, const SE3d &b)
 }
 
 // Points 2-6 m in front of the true camera, inside the image; a fraction of the matches replaced by random pixels.
-std::vector<PointObservation> makeScene(const SE3d &cTw, int count, double noisePx, double outlierFraction,
-                                        std::vector<bool> &isOutlier, std::mt19937 &rng)
+std::vector<ReprojectionObservation> makeScene(const SE3d &cTw, int count, double noisePx, double outlierFraction,
+                                               std::vector<bool> &isOutlier, std::mt19937 &rng)
 {
   std::uniform_real_distribution<double> u(0., 640.), v(0., 480.), depth(2., 6.), unit(0., 1.);
   std::normal_distribution<double> noise(0., noisePx);
   const SE3d wTc = cTw.inverse();
-  std::vector<PointObservation> out;
+  std::vector<ReprojectionObservation> out;
   isOutlier.clear();
   for (int i = 0; i < count; ++i) {
     const double z = depth(rng), pu = u(rng), pv = v(rng);
     const Eigen::Vector3d cX((pu - kK.cx) / kK.fx * z, (pv - kK.cy) / kK.fy * z, z);
-    PointObservation obs;
+    ReprojectionObservation obs;
     obs.wX = wTc * cX;
     const bool outlier = unit(rng) < outlierFraction;
     obs.uv = outlier ? Eigen::Vector2d(u(rng), v(rng)) : Eigen::Vector2d(pu + noise(rng), pv + noise(rng));
@@ -54,7 +54,7 @@ std::vector<PointObservation> makeScene(const SE3d &cTw, int count, double noise
 TEST(PoseOnly, ReprojectionJacobianMatchesNumericDifferences)
 {
   const SE3d cTw = poseFrom(Eigen::Vector3d(0.1, -0.2, 0.05), Eigen::Vector3d(0.3, -0.1, 0.2));
-  PointObservation obs;
+  ReprojectionObservation obs;
   obs.wX = Eigen::Vector3d(0.4, -0.3, 3.5);
   obs.uv = Eigen::Vector2d(300., 250.);
   Eigen::Vector2d r0;
@@ -79,7 +79,7 @@ TEST(PoseOnly, RecoversAPerturbedPoseAndFlagsOutliers)
   std::mt19937 rng(7);
   const SE3d truth = poseFrom(Eigen::Vector3d(0.05, 0.3, -0.1), Eigen::Vector3d(0.2, -0.05, 0.4));
   std::vector<bool> isOutlier;
-  const std::vector<PointObservation> obs = makeScene(truth, 300, 0.7, 0.25, isOutlier, rng);
+  const std::vector<ReprojectionObservation> obs = makeScene(truth, 300, 0.7, 0.25, isOutlier, rng);
   // 5 cm and about 3 degrees away: a constant-velocity prediction after a jerk.
   const SE3d start = poseFrom(Eigen::Vector3d(0.03, -0.03, 0.02), Eigen::Vector3d(0.03, -0.02, 0.03)) * truth;
   const hslam::PoseOnlyResult result = hslam::optimizePoseOnly(start, obs, kK);
@@ -102,7 +102,7 @@ TEST(PoseOnly, RecoversAPerturbedPoseAndFlagsOutliers)
 TEST(PoseOnly, TooFewMatchesLeaveThePoseUnchanged)
 {
   const SE3d start = poseFrom(Eigen::Vector3d(0.1, 0., 0.), Eigen::Vector3d(1., 2., 3.));
-  std::vector<PointObservation> obs(2);
+  std::vector<ReprojectionObservation> obs(2);
   const hslam::PoseOnlyResult result = hslam::optimizePoseOnly(start, obs, kK);
   EXPECT_EQ(result.inliers, 0);
   EXPECT_LT((result.cTw.translation() - start.translation()).norm(), 1e-15);

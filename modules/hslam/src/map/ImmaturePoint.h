@@ -12,6 +12,7 @@
 #ifndef HSLAM_MAP_IMMATURE_POINT_H
 #define HSLAM_MAP_IMMATURE_POINT_H
 
+#include "features/BinaryDescriptor.h"
 #include "features/PatchPattern.h"
 
 #include <array>
@@ -34,7 +35,7 @@ struct ImmaturePoint {
   int hostKeyframeId = -1;
   float u = 0.f, v = 0.f; //!< host pixel, level 0
   int selectionLevel = 0; //!< pyramid level at which the selector picked it (0, 1 or 2; DSO "type")
-  bool isCorner = false;  //!< FAST corner (features issue) rather than a gradient pixel
+  bool isCorner = false;  //!< FAST corner rather than a gradient pixel (descriptor sharing)
   float idepthMin = 0.f;  //!< lower bound of the inverse-depth interval, 1/m
   float idepthMax = std::numeric_limits<float>::infinity(); //!< upper bound (infinite until first trace)
   float quality = 1e4f;        //!< second-best / best matching error ratio of the last trace (DSO)
@@ -42,6 +43,9 @@ struct ImmaturePoint {
   TraceStatus lastStatus = TraceStatus::uninitialized;
   std::array<float, kPatternSize> patch{};       //!< host intensities of the pattern
   std::array<float, kPatternSize> patchWeight{}; //!< gradient weights of the pattern pixels
+  OrbDescriptor orb;                             //!< ORB descriptor at the host pixel (descriptor sharing)
+  float orbAngleDeg = 0.f;                       //!< its orientation, degrees
+  bool hasOrb = false;                           //!< false in direct mode or too close to the border
 };
 } // namespace hslam
 

@@ -16,6 +16,7 @@
 #ifndef HSLAM_MAP_MAP_POINT_H
 #define HSLAM_MAP_MAP_POINT_H
 
+#include "features/BinaryDescriptor.h"
 #include "features/PatchPattern.h"
 
 #include <array>
@@ -40,8 +41,9 @@ struct MapPoint {
   bool isCorner = false; //!< selected as a FAST corner (descriptor is reliable) rather than a gradient pixel
   std::array<float, kPatternSize> patch{};       //!< host intensities of the pattern pixels (active only)
   std::array<float, kPatternSize> patchWeight{}; //!< gradient-dependent weights c^2/(c^2+|g|^2) per pixel (DSO)
-  std::array<uint32_t, 8> orb{};                 //!< 256-bit ORB descriptor (filled by the features issue)
-  bool hasOrb = false;
+  OrbDescriptor orb;                             //!< 256-bit ORB descriptor at the host pixel (descriptor sharing)
+  float orbAngleDeg = 0.f;                       //!< orientation the descriptor was computed at, degrees
+  bool hasOrb = false;                           //!< false in direct mode or too close to the border
 };
 } // namespace hslam
 

@@ -320,6 +320,9 @@ MapPoint PointActivation::makeMapPoint(const ImmaturePoint &pt)
   p.isCorner = pt.isCorner;
   p.patch = pt.patch;
   p.patchWeight = pt.patchWeight;
+  p.orb = pt.orb;
+  p.orbAngleDeg = pt.orbAngleDeg;
+  p.hasOrb = pt.hasOrb;
   return p;
 }
 

@@ -3,7 +3,7 @@
  */
 #include "system/LocalMapper.h"
 
-#include "features/PixelSelector.h"
+#include "features/SharedPointSelector.h"
 #include "mapping/ImmaturePointTracer.h"
 #include "mapping/PointActivation.h"
 #include "mapping/SparseIdepthInterpolator.h"
@@ -11,6 +11,7 @@
 #include "mapping/WindowOptimizer.h"
 #include "system/RunStatistics.h"
 #include "tracking/CoarseTracker.h"
+#include "tracking/RelocalizationIndex.h"
 
 #include <visp3/hslam/vpHSlamLog.h>
 
@@ -25,6 +26,9 @@ namespace
 constexpr int kActivationIterations = 3;
 //! DSO makeCoarseDepthL0: a point's weight in the tracking reference is sqrt(1e-3 * H_idepth).
 constexpr double kTrackingWeightScale = 1e-3;
+//! Relocalisation matches a lost frame against a candidate keyframe's points and those of the keyframes this many
+//! ids before and after it.
+constexpr int kRelocalizationNeighbours = 2;
 //! Floor on a point's inverse-depth variance when turned into a tracking weight (a zero variance = unknown).
 constexpr double kMinIdepthVariance = 1e-12;
 //! DSO makeKeyFrame: window RMSE above which keyframes 2, 3, 4 reveal a failed initialisation.
@@ -47,11 +51,15 @@ constexpr unsigned int kSelectionSeedOffset = 7919u;
 } // namespace
 
 struct LocalMapper::Impl {
-  Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated)
-      : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper), selector(p.features),
-        optimizer(p)
+  Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated, const OrbVocabulary *voc)
+      : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),
+        selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect), optimizer(p)
   {
     optimizer.setPhotometricallyCalibrated(calibrated);
+    vocabulary = voc;
+    if (vocabulary) {
+      relocalization = std::make_unique<RelocalizationIndex>(*vocabulary);
+    }
   }
 
   vpHSlamParameters params;
@@ -59,18 +67,45 @@ struct LocalMapper::Impl {
   int width, height;
   ImmaturePointTracer tracer;
   PointActivation activation;
-  PixelSelector selector;
+  SharedPointSelector selector;
   WindowOptimizer optimizer;
-  std::vector<SelectedPixel> selected;             //!< scratch of the pixel selection
-  std::vector<CoarseTrackerPoint> referencePoints; //!< tracking reference of the newest keyframe
+  std::vector<SelectedPixel> selected;     //!< scratch of the pixel selection
+  std::vector<bool> selectedCorner;        //!< per selected pixel: a FAST corner
+  std::vector<cv::Point2f> describePixels; //!< scratch of describe()
+  std::vector<OrbDescriptor> describeOut;
+  std::vector<bool> describeValid;
+  std::vector<float> describeAngles;
+
+  //! Descriptor sharing: ORB descriptors for points [begin, end) of \e points, hosted by \e frame.
+  void describe(const Frame &frame, std::vector<ImmaturePoint> &points, size_t begin)
+  {
+    if (!selector.withDescriptors() || begin >= points.size()) {
+      return;
+    }
+    describePixels.clear();
+    for (size_t i = begin; i < points.size(); ++i) {
+      describePixels.emplace_back(points[i].u, points[i].v);
+    }
+    selector.describe(frame.raw, describePixels, describeOut, describeValid, describeAngles);
+    for (size_t i = begin; i < points.size(); ++i) {
+      const size_t k = i - begin;
+      points[i].hasOrb = describeValid[k];
+      points[i].orb = describeOut[k];
+      points[i].orbAngleDeg = describeAngles[k];
+    }
+  }
+  std::vector<CoarseTrackerPoint> referencePoints;     //!< tracking reference of the newest keyframe
+  std::vector<ReferenceFeature> referenceFeatures;     //!< its points with descriptors (hybrid tracking)
+  std::unique_ptr<RelocalizationIndex> relocalization; //!< null without a vocabulary
+  const OrbVocabulary *vocabulary;
   int referenceKeyframe = -1;
   std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
   int keyframesInSegment = 0;
 };
 
 LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
-                         bool photometricCalibration)
-    : m_impl(new Impl(params, K0, width, height, photometricCalibration)),
+                         bool photometricCalibration, const OrbVocabulary *vocabulary)
+    : m_impl(new Impl(params, K0, width, height, photometricCalibration, vocabulary)),
       m_photometricCalibration(photometricCalibration)
 {
 }
@@ -80,8 +115,8 @@ LocalMapper::~LocalMapper() = default;
 void LocalMapper::clear()
 {
   // A fresh optimiser and activation state: a new segment shares nothing with the old one.
-  std::unique_ptr<Impl> fresh(
-      new Impl(m_impl->params, m_impl->K0, m_impl->width, m_impl->height, m_photometricCalibration));
+  std::unique_ptr<Impl> fresh(new Impl(m_impl->params, m_impl->K0, m_impl->width, m_impl->height,
+                                       m_photometricCalibration, m_impl->vocabulary));
   m_impl.swap(fresh);
   m_window.clear();
   m_initializationFailed = false;
@@ -112,8 +147,8 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
 
   KeyframePtr kf0 = std::make_shared<Keyframe>();
   kf0->frame = first;
-  m.selector.select(first->pyramid, m.params.features.desiredPointDensity,
-                    static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected);
+  m.selector.select(first->raw, first->pyramid, m.params.features.desiredPointDensity,
+                    static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected, m.selectedCorner);
   // Each selected pixel is searched along its epipolar segment in the second frame around its prior (the tracer
   // does DSO's discrete search + Gauss-Newton), then refined by the window's point optimiser below.
   const SE3d secondMfirst = init.c2Mc1;
@@ -123,11 +158,13 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
   std::vector<ImmaturePoint> candidates;
   candidates.reserve(m.selected.size());
   TraceStatistics traceStats;
-  for (const SelectedPixel &px : m.selected) {
+  for (size_t s = 0; s < m.selected.size(); ++s) {
+    const SelectedPixel &px = m.selected[s];
     ImmaturePoint pt;
     if (!m.tracer.createImmaturePoint(*first, static_cast<float>(px.u), static_cast<float>(px.v), px.level, pt)) {
       continue;
     }
+    pt.isCorner = m.selectedCorner[s];
     const IdepthPrior prior = interpolator.query(px.u, px.v);
     double halfWidth =
         std::max(kInitialIntervalSigmas * std::sqrt(prior.idepthVar), kInitialIntervalMinRelative * prior.idepth);
@@ -148,6 +185,7 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
     }
     candidates.push_back(pt);
   }
+  m.describe(*first, candidates, 0);
 
   m.optimizer.addKeyframe(kf0);
   KeyframePtr kf1 = std::make_shared<Keyframe>();
@@ -214,6 +252,16 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
   activatePoints(*kf);
   const double t2 = threadCpuMs();
   finishKeyframe(kf);
+  if (m.relocalization) {
+    std::vector<OrbDescriptor> descriptors;
+    descriptors.reserve(kf->immature.size());
+    for (const ImmaturePoint &pt : kf->immature) {
+      if (pt.hasOrb) {
+        descriptors.push_back(pt.orb);
+      }
+    }
+    m.relocalization->addKeyframe(keyframeId, descriptors);
+  }
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << keyframeId << " timing: trace " << t1 - t0 << " ms, activation "
                                               << t2 - t1 << " ms, rest " << threadCpuMs() - t2 << " ms");
 }
@@ -282,6 +330,7 @@ void LocalMapper::buildReferencePoints()
 {
   Impl &m = *m_impl;
   m.referencePoints.clear();
+  m.referenceFeatures.clear();
   if (m_window.empty()) {
     m.referenceKeyframe = -1;
     return;
@@ -299,6 +348,15 @@ void LocalMapper::buildReferencePoints()
       if (projectIntoReference(refMhost, m.K0, m.width, m.height, p.u, p.v, static_cast<float>(p.idepth),
                                static_cast<float>(weight), out)) {
         m.referencePoints.push_back(out);
+      }
+      if (p.hasOrb) {
+        // Every active point with a descriptor, also one outside the reference image: the new frame may see it.
+        ReferenceFeature f;
+        const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
+        f.Xref = refMhost * (ray / p.idepth);
+        f.orb = p.orb;
+        f.angleDeg = p.orbAngleDeg;
+        m.referenceFeatures.push_back(f);
       }
     }
   }
@@ -342,15 +400,19 @@ void LocalMapper::dropPointsOutOfView(const Keyframe &newest)
 void LocalMapper::makeNewImmaturePoints(Keyframe &kf)
 {
   Impl &m = *m_impl;
-  m.selector.select(kf.frame->pyramid, m.params.features.desiredImmatureDensity,
-                    static_cast<unsigned int>(kf.frame->id) + kSelectionSeedOffset, m.selected);
-  kf.immature.reserve(kf.immature.size() + m.selected.size());
+  m.selector.select(kf.frame->raw, kf.frame->pyramid, m.params.features.desiredImmatureDensity,
+                    static_cast<unsigned int>(kf.frame->id) + kSelectionSeedOffset, m.selected, m.selectedCorner);
+  const size_t begin = kf.immature.size();
+  kf.immature.reserve(begin + m.selected.size());
   ImmaturePoint pt;
-  for (const SelectedPixel &px : m.selected) {
+  for (size_t s = 0; s < m.selected.size(); ++s) {
+    const SelectedPixel &px = m.selected[s];
     if (m.tracer.createImmaturePoint(*kf.frame, static_cast<float>(px.u), static_cast<float>(px.v), px.level, pt)) {
+      pt.isCorner = m.selectedCorner[s];
       kf.immature.push_back(pt);
     }
   }
+  m.describe(*kf.frame, kf.immature, begin);
 }
 
 void LocalMapper::marginalize(int keyframeId)
@@ -362,6 +424,11 @@ void LocalMapper::marginalize(int keyframeId)
     return;
   }
   m.optimizer.marginalizeKeyframe(keyframeId);
+  if (m.relocalization) {
+    RelocalizationKeyframe points;
+    keyframePointsWorld(**it, points);
+    m.relocalization->setKeyframePoints(keyframeId, std::move(points.wX), std::move(points.descriptors));
+  }
   KeyframeState state;
   state.id = keyframeId;
   state.wMc = (*it)->frame->cMw.inverse();
@@ -372,6 +439,83 @@ void LocalMapper::marginalize(int keyframeId)
 }
 
 // ------------------------------------------------------------------------------------------------ outputs
+
+void LocalMapper::keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const
+{
+  const Impl &m = *m_impl;
+  out.id = kf.id();
+  out.wX.clear();
+  out.descriptors.clear();
+  const SE3d wMc = kf.frame->cMw.inverse();
+  for (const MapPoint &p : kf.points) {
+    if (p.status == PointStatus::outlier || !p.hasOrb || !(p.idepth > 0.)) {
+      continue;
+    }
+    const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
+    out.wX.push_back(wMc * (ray / p.idepth));
+    out.descriptors.push_back(p.orb);
+  }
+}
+
+double LocalMapper::descriptorBytesPerKeyframe() const
+{
+  const Impl &m = *m_impl;
+  if (!m.selector.withDescriptors() || m_window.empty()) {
+    return 0.;
+  }
+  // What a descriptor adds to a point: the descriptor, its angle and its flag (padding included by sizeof
+  // differences would overstate it; these are the members added for descriptor sharing).
+  constexpr double kPerPoint = sizeof(OrbDescriptor) + sizeof(float) + sizeof(bool);
+  double points = 0.;
+  for (const KeyframePtr &kf : m_window) {
+    points += static_cast<double>(kf->points.size() + kf->immature.size());
+  }
+  double bytes = kPerPoint * points / static_cast<double>(m_window.size());
+  if (m.relocalization && m.relocalization->size() > 0) {
+    bytes += m.relocalization->memoryBytes() / static_cast<double>(m.relocalization->size());
+  }
+  return bytes;
+}
+
+bool LocalMapper::indexesKeyframes() const
+{
+  return m_impl->relocalization != nullptr;
+}
+
+std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(RelocalizationFrame &frame,
+                                                                          int maxCandidates) const
+{
+  const Impl &m = *m_impl;
+  std::vector<RelocalizationKeyframe> out;
+  if (!m.relocalization) {
+    return out;
+  }
+  BowVector bow;
+  m.relocalization->describeFrame(frame, bow);
+  for (int id : m.relocalization->candidates(bow, maxCandidates)) {
+    // The candidate and its neighbours in time (they see the same place; a keyframe alone hosts few points).
+    RelocalizationKeyframe k;
+    k.id = id;
+    for (int n = id - kRelocalizationNeighbours; n <= id + kRelocalizationNeighbours; ++n) {
+      RelocalizationKeyframe part;
+      auto inWindow =
+          std::find_if(m_window.begin(), m_window.end(), [n](const KeyframePtr &w) { return w->id() == n; });
+      if (inWindow != m_window.end()) {
+        keyframePointsWorld(**inWindow, part);
+      } else if (!m.relocalization->keyframePoints(n, part)) {
+        continue;
+      }
+      k.wX.insert(k.wX.end(), part.wX.begin(), part.wX.end());
+      k.descriptors.insert(k.descriptors.end(), part.descriptors.begin(), part.descriptors.end());
+    }
+    if (k.wX.empty()) {
+      continue;
+    }
+    m.relocalization->index(k);
+    out.push_back(std::move(k));
+  }
+  return out;
+}
 
 bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
                                            double &exposure) const
@@ -390,6 +534,7 @@ bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframe
     return false;
   }
   tracker.setReference(*ref->frame, m.referencePoints);
+  tracker.setReferenceFeatures(m.referenceFeatures);
   keyframeId = ref->id();
   affine = ref->frame->affine;
   exposure = ref->frame->exposure;
@@ -461,6 +606,9 @@ double LocalMapper::memoryBytes() const
     bytes += static_cast<double>(kf->frame->raw.getSize());
     bytes +=
         static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
+  }
+  if (m_impl->relocalization) {
+    bytes += m_impl->relocalization->memoryBytes();
   }
   return bytes;
 }

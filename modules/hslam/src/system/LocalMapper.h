@@ -37,7 +37,10 @@
 namespace hslam
 {
 class CoarseTracker;
+class OrbVocabulary;
 struct TwoViewInitialization;
+struct RelocalizationKeyframe;
+struct RelocalizationFrame;
 
 class VISP_EXPORT LocalMapper
 {
@@ -50,8 +53,12 @@ public:
     unsigned int activePoints = 0;
   };
 
+  /*!
+    \param vocabulary : when not null (hybrid / indirect tracking with relocalisation), keyframes are indexed for
+    relocalisation (it must outlive the mapper).
+  */
   LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
-              bool photometricCalibration);
+              bool photometricCalibration, const OrbVocabulary *vocabulary = nullptr);
   ~LocalMapper();
 
   /*!
@@ -98,6 +105,17 @@ public:
   //! Drop the window (a new segment starts).
   void clear();
 
+  // ---- relocalisation (only with a vocabulary)
+  //! Memory the descriptors add to a keyframe (point descriptors, BoW vector, stored points), bytes; 0 without.
+  double descriptorBytesPerKeyframe() const;
+  //! True when keyframes are indexed for relocalisation.
+  bool indexesKeyframes() const;
+  /*!
+    Keyframes of the segment most similar to a lost frame (BoW), best first, with their points (world) and direct
+    index; the frame's direct index is filled on the way.
+  */
+  std::vector<RelocalizationKeyframe> relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates) const;
+
 private:
   void traceAll(const Frame &frame);
   void activatePoints(const Keyframe &newest);
@@ -107,6 +125,8 @@ private:
   void dropPointsOutOfView(const Keyframe &newest);
   void makeNewImmaturePoints(Keyframe &kf);
   void marginalize(int keyframeId);
+  //! Points of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
+  void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 
   struct Impl;
   std::unique_ptr<Impl> m_impl;

@@ -89,6 +89,14 @@ void RunStatistics::addFrameMappingMs(double ms)
   m_frameMappingMs.push_back(ms);
 }
 
+void RunStatistics::addHybridFrame(int matches, int inliers, double geometricWeight)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_orbMatches.push_back(matches);
+  m_orbInliers.push_back(inliers);
+  m_geometricWeight.push_back(geometricWeight);
+}
+
 RunStatistics::Summary RunStatistics::summary() const
 {
   constexpr double kMedian = 0.5, kP95 = 0.95, kMax = 1.;
@@ -101,6 +109,9 @@ RunStatistics::Summary RunStatistics::summary() const
   s.keyframeMsMedian = percentile(m_keyframeMs, kMedian);
   s.keyframeMsP95 = percentile(m_keyframeMs, kP95);
   s.frameMappingMsMedian = percentile(m_frameMappingMs, kMedian);
+  s.orbMatchesMedian = percentile(m_orbMatches, kMedian);
+  s.orbInliersMedian = percentile(m_orbInliers, kMedian);
+  s.geometricWeightMedian = percentile(m_geometricWeight, kMedian);
   return s;
 }
 
@@ -111,5 +122,8 @@ void RunStatistics::clear()
   m_initializationMs.clear();
   m_keyframeMs.clear();
   m_frameMappingMs.clear();
+  m_orbMatches.clear();
+  m_orbInliers.clear();
+  m_geometricWeight.clear();
 }
 } // namespace hslam

@@ -38,12 +38,15 @@ public:
   void addInitializationMs(double ms);
   void addKeyframeMappingMs(double ms);
   void addFrameMappingMs(double ms);
+  //! Hybrid / indirect tracking of one frame: ORB matches, geometric inliers, K at the finest level.
+  void addHybridFrame(int matches, int inliers, double geometricWeight);
 
   struct Summary {
     double trackingMsMedian = 0., trackingMsP95 = 0., trackingMsMax = 0.;
     double initializationMsMedian = 0.;
     double keyframeMsMedian = 0., keyframeMsP95 = 0.;
     double frameMappingMsMedian = 0.;
+    double orbMatchesMedian = 0., orbInliersMedian = 0., geometricWeightMedian = 0.;
   };
   Summary summary() const;
   void clear();
@@ -51,6 +54,7 @@ public:
 private:
   mutable std::mutex m_mutex;
   std::vector<double> m_trackingMs, m_initializationMs, m_keyframeMs, m_frameMappingMs;
+  std::vector<double> m_orbMatches, m_orbInliers, m_geometricWeight;
 };
 } // namespace hslam
 

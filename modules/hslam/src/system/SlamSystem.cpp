@@ -41,8 +41,22 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_initializer = std::make_unique<TwoViewInitializer>(m_params.initializer, m_preprocessor.intrinsics(), orbOptions);
   m_tracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
   m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
+  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect && m_params.tracking.relocalize) {
+    const std::string path = vpHSlamVocabulary::defaultPath();
+    if (path.empty()) {
+      VP_HSLAM_LOG(vpHSlamLog::warning, "no vocabulary found (set HSLAM_VOCABULARY to a vocabulary file): "
+                                        "relocalisation is off, a lost camera starts a new map segment");
+    } else {
+      m_vocabulary = std::make_unique<vpHSlamVocabulary>(vpHSlamVocabulary::load(path));
+    }
+  }
   m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
-                                           m_preprocessor.height(), calibrated);
+                                           m_preprocessor.height(), calibrated,
+                                           m_vocabulary ? &m_vocabulary->impl() : nullptr);
+  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect) {
+    m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
+                                               m_preprocessor.height());
+  }
   if (!m_params.system.deterministic) {
     startMappingThread();
   }
@@ -286,10 +300,34 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   }
   history.lastAffine = m_lastAffine;
 
+  if (m_relocalizing) {
+    if (frame->timestamp - m_lostSince > m_params.tracking.relocalizationTimeout) {
+      VP_HSLAM_LOG(vpHSlamLog::warning, "frame " << frame->id << ": relocalisation failed for "
+                                                 << frame->timestamp - m_lostSince
+                                                 << " s; a new map segment will be initialised");
+      declareLost();
+      m_runStats.addTrackingMs(nowMs() - t0);
+      return vpHSlam::stateLost;
+    }
+    if (!relocalizePose(frame, history)) {
+      m_runStats.addTrackingMs(nowMs() - t0);
+      return vpHSlam::stateLost;
+    }
+  }
   SE3d newMref;
   AffineBrightness affine;
   CoarseTrackingResult result;
-  const bool success = m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
+  const bool success = estimatePose(frame, history, newMref, affine, result);
+  if (m_relocalizing) {
+    if (!success) {
+      m_runStats.addTrackingMs(nowMs() - t0);
+      return vpHSlam::stateLost; // the relocalised pose did not hold against the map: try the next frame
+    }
+    m_relocalizing = false;
+    ++m_relocSuccesses;
+    VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": relocalised after " << frame->timestamp - m_lostSince
+                                            << " s, tracking resumes in the same map");
+  }
   const bool finite = newMref.translation().allFinite() && newMref.unitQuaternion().coeffs().allFinite() &&
                       std::isfinite(affine.a) && std::isfinite(affine.b);
   if (!success) {
@@ -299,6 +337,17 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
                                              << m_consecutiveFailures << " in a row");
   } else {
     m_consecutiveFailures = 0;
+  }
+  if (finite && m_consecutiveFailures > m_params.system.maxTrackingFailures && m_vocabulary &&
+      m_mapper->indexesKeyframes()) {
+    // The map stays: lost frames try relocalisation into it (frames until then are reported lost).
+    m_runStats.addTrackingMs(nowMs() - t0);
+    VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": tracking lost ("
+                                            << coarseTrackingStatusName(result.status) << "); relocalising");
+    m_relocalizing = true;
+    m_lostSince = frame->timestamp;
+    m_consecutiveFailures = 0;
+    return vpHSlam::stateLost;
   }
   if (!finite || m_consecutiveFailures > m_params.system.maxTrackingFailures) {
     m_runStats.addTrackingMs(nowMs() - t0);
@@ -328,6 +377,51 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     deliver(std::move(job));
   }
   return vpHSlam::stateTracking;
+}
+
+bool SlamSystem::estimatePose(const FramePtr &frame, CoarseMotionHistory history, SE3d &newMref,
+                              AffineBrightness &affine, CoarseTrackingResult &result)
+{
+  if (!m_hybrid) {
+    return m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
+  }
+  const bool indirectOnly = m_params.tracking.mode == vpHSlamParameters::trackingIndirect;
+  m_hybrid->extract(frame->raw);
+  std::vector<SE3d> hypotheses;
+  CoarseTracker::makeMotionHypotheses(history, hypotheses); // the first is the constant-velocity prediction
+  m_hybrid->indirectStep(m_tracker->referenceFeatures(), hypotheses.front(), m_indirect);
+  bool success = false;
+  if (m_indirect.usable) {
+    m_indirect.term.poseFromGeometryOnly = indirectOnly;
+    m_tracker->setGeometricTerm(&m_indirect.term);
+    history.hasIndirectPose = true;
+    history.indirectMref = m_indirect.newMref;
+  }
+  if (indirectOnly) {
+    // The pose is the geometric one; the photometric side only estimates (a, b) and the keyframe criteria.
+    newMref = m_indirect.newMref;
+    affine = history.lastAffine;
+    success = m_indirect.usable && m_tracker->track(*frame, newMref, affine, result);
+    if (!m_indirect.usable) {
+      result.status = CoarseTrackingStatus::tooFewResiduals;
+    }
+  } else {
+    success = m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
+  }
+  m_tracker->setGeometricTerm(nullptr);
+  if (success) {
+    m_runStats.addHybridFrame(m_indirect.matches, m_indirect.inliers, result.geometricWeight);
+  }
+  std::vector<vpImagePoint> matched;
+  if (success && m_indirect.usable) {
+    matched.reserve(m_indirect.term.uv.size());
+    for (const Eigen::Vector2d &uv : m_indirect.term.uv) {
+      matched.emplace_back(uv.y(), uv.x());
+    }
+  }
+  std::lock_guard<std::mutex> lock(m_imageMutex);
+  m_lastMatches.swap(matched);
+  return success;
 }
 
 bool SlamSystem::keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result)
@@ -406,6 +500,7 @@ void SlamSystem::declareLost(bool discardSegment)
   }
   m_trackerRefKeyframe = -1;
   m_initialized = false;
+  m_relocalizing = false;
   m_initializer->reset();
   m_initFirstFrame.reset();
   m_pendingFrames.clear();
@@ -450,6 +545,9 @@ void SlamSystem::reset()
   m_keyframeCount = 0;
   m_segmentsStarted = 0;
   m_restartRequested = false;
+  m_relocalizing = false;
+  m_relocAttempts = 0;
+  m_relocSuccesses = 0;
   std::lock_guard<std::mutex> lock(m_imageMutex);
   m_lastImage.resize(0, 0);
 }
@@ -542,6 +640,12 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.mapMemoryMb = m_snapshotMemoryMb;
   s.keyframesHeld = m_snapshotKeyframesHeld;
   s.mapMemoryMbPerKeyframe = m_snapshotKeyframesHeld > 0 ? m_snapshotMemoryMb / m_snapshotKeyframesHeld : 0.;
+  s.orbMatchesMedian = t.orbMatchesMedian;
+  s.orbInliersMedian = t.orbInliersMedian;
+  s.geometricWeightMedian = t.geometricWeightMedian;
+  s.relocalizationsAttempted = m_relocAttempts.load();
+  s.relocalizationsSucceeded = m_relocSuccesses.load();
+  s.descriptorKbPerKeyframe = m_snapshotDescriptorKb;
   return s;
 }
 

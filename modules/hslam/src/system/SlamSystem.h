@@ -39,9 +39,11 @@
 #include "system/RunStatistics.h"
 #include "system/TrajectoryRecorder.h"
 #include "tracking/CoarseTracker.h"
+#include "tracking/HybridTracker.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlam.h>
+#include <visp3/hslam/vpHSlamVocabulary.h>
 
 #include <atomic>
 #include <condition_variable>
@@ -97,6 +99,17 @@ private:
   //! After initialisation: give poses to the frames between the two initial keyframes (tracked backwards).
   void backfillInitializationFrames(const SE3d &c2Mc1, int firstFrameId, int secondFrameId);
   vpHSlam::State trackInitialized(const FramePtr &frame);
+  /*!
+    Pose of \e frame against the current reference: direct (DSO hypotheses), indirect (ORB matches, pose-only) or
+    hybrid (indirect step, then the joint optimisation seeded by it), per Tracking::mode.
+  */
+  bool estimatePose(const FramePtr &frame, CoarseMotionHistory history, SE3d &newMref, AffineBrightness &affine,
+                    CoarseTrackingResult &result);
+  /*!
+    Relocalisation of a lost frame (SlamSystemRelocalization.cpp): BoW candidates, ORB matching, PnP RANSAC and
+    pose-only refinement; on success \e history holds the pose (no motion) for the joint refinement that follows.
+  */
+  bool relocalizePose(const FramePtr &frame, CoarseMotionHistory &history);
   void adoptPreparedReference();
   bool keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result);
   void deliver(MappingJob job);
@@ -130,6 +143,8 @@ private:
   };
   std::vector<PendingFrame> m_pendingFrames; //!< frames after m_initFirstFrame, oldest first
   std::unique_ptr<CoarseTracker> m_backfillTracker;
+  std::unique_ptr<HybridTracker> m_hybrid; //!< keypoints and indirect step (null in direct mode)
+  IndirectStepResult m_indirect;           //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
   AffineBrightness m_trackerRefAffine; //!< brightness of the reference when it was set
@@ -137,6 +152,8 @@ private:
   AffineBrightness m_lastAffine; //!< (a, b) of the last tracked frame
   int m_framesSinceKeyframeRequest = 0;
   int m_consecutiveFailures = 0;
+  bool m_relocalizing = false; //!< tracking failed: lost frames try relocalisation until it works or times out
+  double m_lostSince = 0.;     //!< timestamp of the first frame of the current relocalisation attempt, seconds
   bool m_initialized = false;
   unsigned int m_segment = 0;
   SE3d m_segmentOrigin;                          //!< wMc given to the first keyframe of the current segment
@@ -151,7 +168,9 @@ private:
   vpImage<unsigned char> m_lastImage;             //!< rectified raw image of the last frame (display)
   std::vector<vpImagePoint> m_lastMatches;        //!< descriptor-matched inlier pixels of the last frame (display)
   std::atomic<unsigned int> m_segmentsStarted{0}; //!< segments that got a map (successful initialisations)
-  std::atomic<bool> m_restartRequested{false};    //!< set by the back end when the initialisation looks wrong
+  std::atomic<unsigned int> m_relocAttempts{0}, m_relocSuccesses{0};
+  std::unique_ptr<vpHSlamVocabulary> m_vocabulary; //!< loaded for relocalisation (hybrid / indirect), else null
+  std::atomic<bool> m_restartRequested{false};     //!< set by the back end when the initialisation looks wrong
 
   // ---- back end
   std::unique_ptr<LocalMapper> m_mapper;
@@ -184,6 +203,7 @@ private:
   unsigned int m_snapshotImmature = 0;
   double m_snapshotMemoryMb = 0.;
   unsigned int m_snapshotKeyframesHeld = 0;
+  double m_snapshotDescriptorKb = 0.;
 };
 } // namespace hslam
 

@@ -166,6 +166,7 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotImmature = static_cast<unsigned int>(m_mapper->immaturePointCount());
   m_snapshotMemoryMb = m_mapper->memoryBytes() / kBytesPerMegabyte;
   m_snapshotKeyframesHeld = static_cast<unsigned int>(m_mapper->keyframesHeld());
+  m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
 }
 
 void SlamSystem::synchronize()

@@ -7,6 +7,7 @@
 #include "common/TextParsing.h"
 
 #include "common/RobustWeights.h"
+#include "tracking/PoseOnlyOptimizer.h"
 #include <visp3/hslam/vpHSlamException.h>
 
 #include <Eigen/Cholesky>
@@ -20,6 +21,10 @@ namespace
 {
 //! DSO: the cutoff of a level is doubled while more than this share of its residuals is saturated...
 constexpr double kMaxSaturatedRatio = 0.6;
+//! Joint objective: floors of the estimated variances s_p^2 (intensity^2) and s_g^2 (pixels^2), so that a frame
+//! with near-zero residuals (synthetic, static) does not give one term an unbounded weight.
+constexpr double kMinPhotometricVariance = 1.;
+constexpr double kMinGeometricVariance = 0.25;
 //! ... up to this factor of the base cutoff (DSO: levelCutoffRepeat < 50).
 constexpr float kMaxCutoffRepeat = 50.f;
 //! Levenberg damping: start, and the value below which the step is extrapolated (DSO trackNewestCoarse).
@@ -103,6 +108,8 @@ void CoarseTracker::setReference(const Frame &refKf, const std::vector<CoarseTra
                    std::to_string(kCoarseTrackerMaxLevels));
   }
   m_numLevels = pyr.numLevels();
+  m_K0 = pyr.level(0).K;
+  m_features.clear();
   m_refAffine = refKf.affine;
   m_refExposure = refKf.exposure;
   m_firstRmse = nan();
@@ -435,11 +442,48 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
       return fail(CoarseTrackingStatus::tooFewResiduals, lvl);
     }
     const float cutoff = baseCutoff * cutoffRepeat;
-    double objectiveOld = (statsOld.energy + priorEnergy(currentAffine)) / statsOld.numTerms;
+    // Joint objective (GeometricTerm): photometric mean energy / s_p^2 + K_l E_g / (n_g s_g^2); without a
+    // geometric term the weights are not applied at all (pure DSO alignment, bit for bit).
+    const bool joint = m_geometric != nullptr && !m_geometric->Xref.empty();
+    double wp = 1., wg = 0.;
+    if (joint) {
+      const double sp2 = std::max(statsOld.energy / statsOld.numTerms, kMinPhotometricVariance);
+      const double K = geometricWeight(lvl, m_geometric->inliers);
+      wp = 1. / sp2;
+      wg = (m_geometric->poseFromGeometryOnly ? 1. : K) /
+           (static_cast<double>(m_geometric->Xref.size()) * std::max(m_geometric->sigma2Px, kMinGeometricVariance));
+      if (lvl == 0) {
+        result.geometricWeight = K;
+      }
+    }
+    auto objective = [&](const ResidualStats &stats, const AffineBrightness &a, const SE3d &pose) {
+      const double photometric = (stats.energy + priorEnergy(a)) / stats.numTerms;
+      return joint ? wp * photometric + wg * geometricEnergy(*m_geometric, m_K0, pose) : photometric;
+    };
+    auto system = [&](const ResidualStats &stats, const AffineBrightness &a, const SE3d &pose,
+                      Eigen::Matrix<double, 8, 8> &H, Eigen::Matrix<double, 8, 1> &b) {
+      buildSystem(lvl, stats, a, H, b);
+      if (!joint) {
+        return;
+      }
+      H *= wp;
+      b *= wp;
+      if (m_geometric->poseFromGeometryOnly) {
+        H.topRows<6>().setZero();
+        H.leftCols<6>().setZero();
+        b.head<6>().setZero();
+      }
+      Eigen::Matrix<double, 8, 8> Hg = Eigen::Matrix<double, 8, 8>::Zero();
+      Eigen::Matrix<double, 8, 1> bg = Eigen::Matrix<double, 8, 1>::Zero();
+      geometricEnergy(*m_geometric, m_K0, pose, &Hg, &bg);
+      H += wg * Hg;
+      b += wg * bg;
+    };
+    double objectiveOld = objective(statsOld, currentAffine, current);
 
     Eigen::Matrix<double, 8, 8> H;
     Eigen::Matrix<double, 8, 1> b;
-    buildSystem(lvl, statsOld, currentAffine, H, b);
+    system(statsOld, currentAffine, current, H, b);
     double lambda = kInitialLambda;
     const size_t iterIndex = std::min(static_cast<size_t>(lvl), m_params.iterationsPerLevel.size() - 1);
     const int maxIterations = m_params.iterationsPerLevel[iterIndex];
@@ -461,14 +505,14 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
       candidateAffine.b += inc[kIndexB];
       const ResidualStats statsNew = evaluate(lvl, target, candidate, candidateAffine, exposure, cutoff);
       const double objectiveNew = statsNew.numTerms >= kCoarseMinResiduals
-                                      ? (statsNew.energy + priorEnergy(candidateAffine)) / statsNew.numTerms
+                                      ? objective(statsNew, candidateAffine, candidate)
                                       : std::numeric_limits<double>::infinity();
       if (objectiveNew < objectiveOld) {
         current = candidate;
         currentAffine = candidateAffine;
         statsOld = statsNew;
         objectiveOld = objectiveNew;
-        buildSystem(lvl, statsOld, currentAffine, H, b);
+        system(statsOld, currentAffine, current, H, b);
         lambda *= kLambdaOnAccept;
       } else {
         lambda *= kLambdaOnReject;
@@ -494,7 +538,8 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     if (!std::isfinite(rmse) || !current.translation().allFinite()) {
       return fail(CoarseTrackingStatus::notFinite, lvl);
     }
-    if (abortRmse != nullptr && rmse > kAbortResidualFactor * (*abortRmse)[static_cast<size_t>(lvl)]) {
+    const bool geometryOnly = m_geometric != nullptr && m_geometric->poseFromGeometryOnly;
+    if (!geometryOnly && abortRmse != nullptr && rmse > kAbortResidualFactor * (*abortRmse)[static_cast<size_t>(lvl)]) {
       return fail(CoarseTrackingStatus::worseThanBound, lvl);
     }
     {
@@ -514,7 +559,8 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     }
   }
 
-  if (1. - result.inlierRatio > kMaxSaturatedRatio) {
+  const bool geometryOnly = m_geometric != nullptr && m_geometric->poseFromGeometryOnly;
+  if (!geometryOnly && 1. - result.inlierRatio > kMaxSaturatedRatio) {
     return fail(CoarseTrackingStatus::tooManyOutliers, 0);
   }
   double aji = 1., bji = 0.;

@@ -31,6 +31,7 @@
 #ifndef HSLAM_TRACKING_COARSE_TRACKER_H
 #define HSLAM_TRACKING_COARSE_TRACKER_H
 
+#include "features/BinaryDescriptor.h"
 #include "map/Frame.h"
 #include "tracking/NormalEquations8.h"
 
@@ -67,6 +68,38 @@ VISP_EXPORT bool projectIntoReference(const SE3d &refMhost, const PinholeIntrins
                                       float uHost, float vHost, float idepthHost, float weight,
                                       CoarseTrackerPoint &out);
 
+/*!
+  A map point with an ORB descriptor, expressed in the reference keyframe: what the indirect step of hybrid
+  tracking projects into a new frame and matches (descriptor sharing: the same points as the direct side's).
+*/
+struct ReferenceFeature {
+  Eigen::Vector3d Xref = Eigen::Vector3d::Zero(); //!< position in the reference camera frame
+  OrbDescriptor orb;                              //!< descriptor computed in the host keyframe
+  float angleDeg = 0.f;                           //!< its orientation, degrees
+};
+
+/*!
+  The geometric half of the joint pose optimisation (paper eq. 1-4): ORB matches kept as inliers by the indirect
+  step, each a point in the reference frame and the level-0 pixel it matched in the new frame. track() then
+  minimises, per pyramid level l (0 = full resolution, see geometricWeight()),
+      E_p / (n_p s_p^2) + K_l E_g / (n_g s_g^2),   K_l = geometricWeight(l, inliers)
+  with E_p the photometric energy (mean taken as today), s_p^2 the mean photometric energy per residual at the
+  start of the level (estimated from this frame's residuals), E_g the Huber-robust sum of squared reprojection
+  errors (threshold sqrt(5.991) pixels) and s_g^2 = \e sigma2Px, the mean squared inlier reprojection error of the
+  indirect step (estimated by the caller from this frame's matches).
+*/
+struct GeometricTerm {
+  std::vector<Eigen::Vector3d> Xref; //!< matched points, reference frame
+  std::vector<Eigen::Vector2d> uv;   //!< their level-0 pixels in the new frame
+  double sigma2Px = 1.;              //!< s_g^2, pixels^2 (> 0)
+  int inliers = 0;                   //!< N_g of eq. 4 (the indirect step's inliers)
+  /*!
+    Indirect ablation: the pose comes from the geometric term alone (the photometric term only estimates (a, b)),
+    and the photometric acceptance checks (outlier share, bound of the previous frame) are not applied.
+  */
+  bool poseFromGeometryOnly = false;
+};
+
 //! Why a track() failed.
 enum class CoarseTrackingStatus {
   ok,                    //!< converged and passed every check
@@ -85,27 +118,30 @@ VISP_EXPORT const char *coarseTrackingStatusName(CoarseTrackingStatus status);
 struct CoarseTrackingResult {
   bool success = false;
   CoarseTrackingStatus status = CoarseTrackingStatus::noReference;
-  int failedLevel = -1;    //!< level where a check failed, -1 when none
-  SE3d newMref;            //!< final estimate (reference-to-new), also on failure
-  AffineBrightness affine; //!< final (a, b) of the new frame
-  CoarseRmsePerLevel rmse; //!< DSO lastResiduals: sqrt(mean energy) per level, intensity units
-  int numLevels = 0;       //!< levels used
-  double flowT = 0.;       //!< mean squared pixel shift from the translation only, px^2 (DSO)
-  double flowR = 0.;       //!< mean squared pixel shift from the rotation only, px^2 (DSO leaves it 0)
-  double flowRT = 0.;      //!< mean squared pixel shift from rotation and translation, px^2 (DSO)
-  double inlierRatio = 0.; //!< level 0: share of residuals below the base cutoff
-  int residuals = 0;       //!< level 0: residuals in the energy (inside the new image)
-  int iterations = 0;      //!< Gauss-Newton iterations over all levels
-  int hypothesesTried = 0; //!< trackWithHypotheses(): hypotheses run; track(): 1
+  int failedLevel = -1;        //!< level where a check failed, -1 when none
+  SE3d newMref;                //!< final estimate (reference-to-new), also on failure
+  AffineBrightness affine;     //!< final (a, b) of the new frame
+  CoarseRmsePerLevel rmse;     //!< DSO lastResiduals: sqrt(mean energy) per level, intensity units
+  int numLevels = 0;           //!< levels used
+  double flowT = 0.;           //!< mean squared pixel shift from the translation only, px^2 (DSO)
+  double flowR = 0.;           //!< mean squared pixel shift from the rotation only, px^2 (DSO leaves it 0)
+  double flowRT = 0.;          //!< mean squared pixel shift from rotation and translation, px^2 (DSO)
+  double inlierRatio = 0.;     //!< level 0: share of residuals below the base cutoff
+  int residuals = 0;           //!< level 0: residuals in the energy (inside the new image)
+  int iterations = 0;          //!< Gauss-Newton iterations over all levels
+  int hypothesesTried = 0;     //!< trackWithHypotheses(): hypotheses run; track(): 1
+  double geometricWeight = 0.; //!< K of eq. 4 at the finest level (0 without a geometric term)
   CoarseTrackingResult() { rmse.fill(std::numeric_limits<double>::quiet_NaN()); }
 };
 
 //! The motion of the last two frames relative to the current reference, for trackWithHypotheses().
 struct CoarseMotionHistory {
-  bool valid = false;          //!< false: only "no motion from the reference" is tried (DSO: first frames)
-  SE3d lastMref;               //!< reference-to-last-frame transform
-  SE3d prelastMref;            //!< reference-to-frame-before-last transform
-  AffineBrightness lastAffine; //!< (a, b) of the last frame: the start value of every hypothesis
+  bool valid = false;           //!< false: only "no motion from the reference" is tried (DSO: first frames)
+  SE3d lastMref;                //!< reference-to-last-frame transform
+  SE3d prelastMref;             //!< reference-to-frame-before-last transform
+  AffineBrightness lastAffine;  //!< (a, b) of the last frame: the start value of every hypothesis
+  bool hasIndirectPose = false; //!< the indirect step gave a pose: it is tried first
+  SE3d indirectMref;            //!< that pose (reference-to-new)
 };
 
 /*!
@@ -164,6 +200,21 @@ public:
   */
   static void makeMotionHypotheses(const CoarseMotionHistory &history, std::vector<SE3d> &hypotheses);
 
+  //! Points with descriptors of the reference (set by the mapper with setReference(); empty in direct mode).
+  void setReferenceFeatures(std::vector<ReferenceFeature> features) { m_features = std::move(features); }
+  const std::vector<ReferenceFeature> &referenceFeatures() const { return m_features; }
+  /*!
+    Geometric term of the next track() / trackWithHypotheses() calls (see GeometricTerm); nullptr (default) for
+    pure direct alignment, exactly DSO's. The object must outlive those calls.
+  */
+  void setGeometricTerm(const GeometricTerm *term) { m_geometric = term; }
+  /*!
+    Geometric energy (Huber-robust, see GeometricTerm) of \e newMref and, when H / b are given, its Gauss-Newton
+    terms for the left-perturbed twist (translation, rotation), added to the top-left 6x6 block / 6 rows.
+    Exposed for the Jacobian test.
+  */
+  static double geometricEnergy(const GeometricTerm &term, const PinholeIntrinsics &K0, const SE3d &newMref,
+                                Eigen::Matrix<double, 8, 8> *H = nullptr, Eigen::Matrix<double, 8, 1> *b = nullptr);
   //! Level-0 RMSE of the first frame tracked against this reference (DSO firstCoarseRMSE), NaN before.
   double firstRmse() const { return m_firstRmse; }
   //! Best RMSE per level of the last trackWithHypotheses() (DSO lastCoarseRMSE).
@@ -234,6 +285,9 @@ private:
   double m_firstRmse;
   CoarseRmsePerLevel m_lastRmse;
   std::vector<SE3d> m_hypotheses; //!< reused by trackWithHypotheses()
+  std::vector<ReferenceFeature> m_features;
+  const GeometricTerm *m_geometric = nullptr;
+  PinholeIntrinsics m_K0; //!< level-0 intrinsics of the reference (geometric term)
 };
 } // namespace hslam
 

@@ -107,6 +107,11 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
                                         AffineBrightness &affine, CoarseTrackingResult &result)
 {
   makeMotionHypotheses(history, m_hypotheses);
+  if (history.hasIndirectPose) {
+    // Hybrid tracking: the pose of the indirect step (ORB matches) is the best guess there is; it goes first and
+    // bounds the others.
+    m_hypotheses.insert(m_hypotheses.begin(), history.indirectMref);
+  }
   CoarseRmsePerLevel achieved;
   achieved.fill(std::numeric_limits<double>::quiet_NaN());
   bool haveOneGood = false;

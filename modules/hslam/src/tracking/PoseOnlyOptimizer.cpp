@@ -7,8 +7,8 @@
 
 namespace hslam
 {
-bool reprojectionResidual(const SE3d &cTw, const PointObservation &obs, const PinholeIntrinsics &K, double minDepth,
-                          Eigen::Vector2d &residual, Eigen::Matrix<double, 2, 6> *jacobian)
+bool reprojectionResidual(const SE3d &cTw, const ReprojectionObservation &obs, const PinholeIntrinsics &K,
+                          double minDepth, Eigen::Vector2d &residual, Eigen::Matrix<double, 2, 6> *jacobian)
 {
   const Eigen::Vector3d cX = cTw * obs.wX;
   if (!(cX.z() >= minDepth)) {
@@ -24,7 +24,7 @@ bool reprojectionResidual(const SE3d &cTw, const PointObservation &obs, const Pi
   return true;
 }
 
-PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit, const std::vector<PointObservation> &observations,
+PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit, const std::vector<ReprojectionObservation> &observations,
                                 const PinholeIntrinsics &K, const PoseOnlyOptions &options)
 {
   PoseOnlyResult result;

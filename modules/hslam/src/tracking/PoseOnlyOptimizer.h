@@ -22,6 +22,7 @@
 #ifndef HSLAM_TRACKING_POSE_ONLY_OPTIMIZER_H
 #define HSLAM_TRACKING_POSE_ONLY_OPTIMIZER_H
 
+#include "features/ImagePyramid.h"
 #include "math/SE3.h"
 
 #include <visp3/core/vpConfig.h>
@@ -33,13 +34,9 @@
 
 namespace hslam
 {
-//! Pinhole intrinsics of the rectified images, pixels.
-struct PinholeIntrinsics {
-  double fx = 0., fy = 0., cx = 0., cy = 0.;
-};
 
 //! One 2D-3D match: a map point in world coordinates and the pixel it was matched to.
-struct PointObservation {
+struct ReprojectionObservation {
   Eigen::Vector3d wX = Eigen::Vector3d::Zero(); //!< world point
   Eigen::Vector2d uv = Eigen::Vector2d::Zero(); //!< matched pixel
   double sigma2 = 1.;                           //!< pixel variance of the match (ORB-SLAM2: scale factor^(2 level))
@@ -67,12 +64,13 @@ struct PoseOnlyResult {
   Reprojection residual (projected - observed, pixels) of one observation and its Jacobian with respect to a left
   perturbation of cTw. Returns false when the point is not in front of the camera (depth < minDepth).
 */
-VISP_EXPORT bool reprojectionResidual(const SE3d &cTw, const PointObservation &obs, const PinholeIntrinsics &K,
+VISP_EXPORT bool reprojectionResidual(const SE3d &cTw, const ReprojectionObservation &obs, const PinholeIntrinsics &K,
                                       double minDepth, Eigen::Vector2d &residual,
                                       Eigen::Matrix<double, 2, 6> *jacobian = nullptr);
 
 //! Robust pose-only optimisation from \e cTwInit (see the file comment).
-VISP_EXPORT PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit, const std::vector<PointObservation> &observations,
+VISP_EXPORT PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit,
+                                            const std::vector<ReprojectionObservation> &observations,
                                             const PinholeIntrinsics &K,
                                             const PoseOnlyOptions &options = PoseOnlyOptions());
 
@@ -80,15 +78,17 @@ VISP_EXPORT PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit, const std::vect
   Weight of the geometric term against the photometric one in the joint optimisation (paper eq. 4, the logistic
   utility): K = 5 exp(-2 l) / (1 + exp((30 - N_g) / 4)), N_g the geometric inliers.
 
-  Which level is l = 0: the paper calls l "the pyramid level at which the optimisation is taking place" and says
-  the utility gives the geometric residuals higher weights in the early stages of the optimisation, then shifts
-  towards the photometric ones (ARCHITECTURE.md: geometry leads at coarse levels, photometry at fine ones). A
-  coarse-to-fine optimisation starts at the coarsest level, so the two statements agree only when l counts the
-  levels from the coarsest one used: \e stepFromCoarsest is 0 at the coarsest level and grows towards the finest.
+  Which level is l = 0: the paper defines l as "the pyramid level at which the optimisation is taking place"
+  (0 = full resolution), but also says the geometric residuals weigh most in the early (coarse) stages, which
+  would need the opposite count. Both counts were measured (hybrid, fast preset, deterministic): l = pyramid level
+  gave 0.048 m ATE on 7scenes_redkitchen_000-299 against 0.056 m when counting from the coarsest level, and
+  0.032 m against 0.202 m on kitti06_000-050 fed every second frame. So l is the pyramid level, as defined: the
+  matches pin the final, full-resolution pose, and at coarse levels (where a pixel is several level-0 pixels
+  wide) the photometric term leads.
 */
-inline double geometricWeight(int stepFromCoarsest, int geometricInliers)
+inline double geometricWeight(int level, int geometricInliers)
 {
-  return 5. * std::exp(-2. * stepFromCoarsest) / (1. + std::exp((30. - geometricInliers) / 4.));
+  return 5. * std::exp(-2. * level) / (1. + std::exp((30. - geometricInliers) / 4.));
 }
 } // namespace hslam
 

@@ -3,6 +3,7 @@
  */
 #include "tracking/Relocalizer.h"
 
+#include <algorithm>
 #include <opencv2/calib3d.hpp>
 
 #include <Eigen/Geometry>
@@ -62,6 +63,39 @@ std::vector<std::pair<int, int>> matchByBow(const RelocalizationKeyframe &keyfra
   return matches;
 }
 
+std::vector<std::pair<int, int>> matchExhaustive(const RelocalizationKeyframe &keyframe,
+                                                 const RelocalizationFrame &frame, const RelocalizerOptions &options)
+{
+  std::vector<int> pointOf(frame.descriptors.size(), -1), distanceOf(frame.descriptors.size(), 257);
+  const std::size_t points = std::min(keyframe.descriptors.size(), keyframe.wX.size());
+  for (std::size_t p = 0; p < points; ++p) {
+    int best = 257, second = 257, bestIndex = -1;
+    for (std::size_t k = 0; k < frame.descriptors.size(); ++k) {
+      const int d = hammingDistance(keyframe.descriptors[p], frame.descriptors[k]);
+      if (d < best) {
+        second = best;
+        best = d;
+        bestIndex = static_cast<int>(k);
+      } else if (d < second) {
+        second = d;
+      }
+    }
+    if (bestIndex >= 0 && best <= options.maxDistance &&
+        static_cast<float>(best) < options.ratio * static_cast<float>(second) &&
+        best < distanceOf[static_cast<std::size_t>(bestIndex)]) {
+      pointOf[static_cast<std::size_t>(bestIndex)] = static_cast<int>(p);
+      distanceOf[static_cast<std::size_t>(bestIndex)] = best;
+    }
+  }
+  std::vector<std::pair<int, int>> matches;
+  for (std::size_t k = 0; k < pointOf.size(); ++k) {
+    if (pointOf[k] >= 0) {
+      matches.emplace_back(pointOf[k], static_cast<int>(k));
+    }
+  }
+  return matches;
+}
+
 RelocalizationResult relocalize(const RelocalizationFrame &frame,
                                 const std::vector<const RelocalizationKeyframe *> &candidates,
                                 const PinholeIntrinsics &K, const RelocalizerOptions &options)
@@ -73,19 +107,21 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
       continue;
     }
     ++result.candidatesTried;
-    const std::vector<std::pair<int, int>> matches = matchByBow(*keyframe, frame, options);
+    const std::vector<std::pair<int, int>> matches =
+        options.exhaustive ? matchExhaustive(*keyframe, frame, options) : matchByBow(*keyframe, frame, options);
+    result.matches = std::max(result.matches, static_cast<int>(matches.size())); // best so far, for logs
     if (static_cast<int>(matches.size()) < options.minMatches) {
       continue;
     }
     std::vector<cv::Point3d> objectPoints;
     std::vector<cv::Point2d> imagePoints;
-    std::vector<PointObservation> observations;
+    std::vector<ReprojectionObservation> observations;
     for (const auto &m : matches) {
       const Eigen::Vector3d &X = keyframe->wX[static_cast<std::size_t>(m.first)];
       const Eigen::Vector2d &uv = frame.uv[static_cast<std::size_t>(m.second)];
       objectPoints.emplace_back(X.x(), X.y(), X.z());
       imagePoints.emplace_back(uv.x(), uv.y());
-      PointObservation obs;
+      ReprojectionObservation obs;
       obs.wX = X;
       obs.uv = uv;
       observations.push_back(obs);
@@ -114,6 +150,7 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     const SE3d cTwPnP(Eigen::Quaterniond(rotation),
                       Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
     const PoseOnlyResult refined = optimizePoseOnly(cTwPnP, observations, K, options.refinement);
+    result.inliers = std::max(result.inliers, refined.inliers);
     if (refined.inliers >= options.minInliers) {
       result.success = true;
       result.keyframeId = keyframe->id;

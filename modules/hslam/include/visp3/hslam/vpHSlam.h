@@ -12,8 +12,8 @@
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpConfig.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
-#include <visp3/core/vpImagePoint.h>
 #include <visp3/core/vpImage.h>
+#include <visp3/core/vpImagePoint.h>
 #include <visp3/hslam/vpHSlamCamera.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
 #include <visp3/hslam/vpHSlamParameters.h>

@@ -17,8 +17,8 @@
 /*!
   \class vpHSlamParameters
   \ingroup group_hslam
-  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, system), each
-  field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part) unless
+  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, system),
+  each field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part) unless
   noted.
 
   What it is for: no threshold lives in algorithm code; everything a user may tune is here, can be written to and
@@ -67,6 +67,7 @@ public:
     int fastThreshold = 7;                      //!< FAST intensity threshold (ARCHITECTURE.md)
     int maxCorners = 1000;                      //!< FAST corners kept per keyframe
     double cornerMinDistance = 4.;              //!< non-maximum suppression radius between corners, pixels
+    double cornerShare = 0.5; //!< hybrid: at most this share of a keyframe's new points are corners (measured)
   };
 
   //! Direct (and later joint) pose tracking against the newest keyframe.
@@ -168,11 +169,11 @@ public:
 
     Format (OpenCV FileStorage YAML, see data/hslam-default.yaml): line 1 is "%YAML:1.0"; one map per section
     (features, tracker, mapper, initializer, tracking, system) whose keys are the member names; booleans are
-    true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on their own line (OpenCV's reader keeps an
-    end-of-line comment inside an unquoted word). The whole file is checked before anything is assigned: on error
-    the object is unchanged.
-    \exception vpHSlamException::fileNotFound, parseError (unknown section or key, repeated key, wrong type,
-    malformed YAML), invalidArgument (value out of range), naming the file and the key.
+    true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on their own line
+    (OpenCV's reader keeps an end-of-line comment inside an unquoted word). The whole file is checked before anything is
+    assigned: on error the object is unchanged. \exception vpHSlamException::fileNotFound, parseError (unknown section
+    or key, repeated key, wrong type, malformed YAML), invalidArgument (value out of range), naming the file and the
+    key.
   */
   void load(const std::string &path);
   //! Write every setting to a YAML file. \exception vpHSlamException::fileUnreadable when it cannot be written.

@@ -1,0 +1,75 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "features/SharedPointSelector.h"
+
+#include "features/CornerDetector.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+//! Smallest corner cell, pixels (a cell of 2 x 2 would leave the gradient selector almost nothing to skip).
+constexpr int kMinCornerCellPx = 4;
+} // namespace
+
+SharedPointSelector::SharedPointSelector(const vpHSlamParameters::Features &params, bool withDescriptors)
+    : m_params(params), m_withDescriptors(withDescriptors), m_gradients(params)
+{
+}
+
+void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount,
+                                 unsigned int seed, std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner)
+{
+  selected.clear();
+  isCorner.clear();
+  m_lastCorners = 0;
+  if (!m_withDescriptors || m_params.maxCorners <= 0) {
+    m_gradients.select(pyramid, desiredCount, seed, selected);
+    isCorner.assign(selected.size(), false);
+    return;
+  }
+  CornerOptions options;
+  options.threshold = m_params.fastThreshold;
+  options.maxCorners =
+      std::min(m_params.maxCorners, static_cast<int>(std::floor(m_params.cornerShare * std::max(0, desiredCount))));
+  options.minDistance = m_params.cornerMinDistance;
+  options.border = kOrbBorderPx + 1; // every corner gets a descriptor
+  detectCorners(raw, options, m_corners);
+  const int width = pyramid.level(0).width, height = pyramid.level(0).height;
+  const int cell = std::max(kMinCornerCellPx, static_cast<int>(std::lround(2. * m_params.cornerMinDistance)));
+  m_grid.reset(width, height, cell);
+  selected.reserve(static_cast<size_t>(desiredCount) + m_corners.size());
+  for (const cv::Point2f &c : m_corners) {
+    SelectedPixel px;
+    px.u = static_cast<int>(std::lround(c.x));
+    px.v = static_cast<int>(std::lround(c.y));
+    px.level = 0;
+    selected.push_back(px);
+    m_grid.markPoint(c.x, c.y);
+  }
+  m_lastCorners = static_cast<int>(m_corners.size());
+  isCorner.assign(selected.size(), true);
+  if (desiredCount > m_lastCorners) {
+    m_gradients.select(pyramid, desiredCount, seed, m_gradientPixels, &m_grid);
+    selected.insert(selected.end(), m_gradientPixels.begin(), m_gradientPixels.end());
+    isCorner.resize(selected.size(), false);
+  }
+}
+
+void SharedPointSelector::describe(const vpImage<unsigned char> &raw, const std::vector<cv::Point2f> &pixels,
+                                   std::vector<OrbDescriptor> &descriptors, std::vector<bool> &valid,
+                                   std::vector<float> &anglesDeg)
+{
+  if (!m_withDescriptors) {
+    descriptors.assign(pixels.size(), OrbDescriptor());
+    valid.assign(pixels.size(), false);
+    anglesDeg.assign(pixels.size(), 0.f);
+    return;
+  }
+  m_descriptors.compute(raw, pixels, descriptors, valid, &anglesDeg);
+}
+} // namespace hslam

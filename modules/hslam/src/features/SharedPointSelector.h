@@ -1,0 +1,76 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file SharedPointSelector.h
+  \brief Descriptor sharing (paper section 3.1): the points of a new keyframe are FAST corners first, then DSO's
+  region-adaptive gradient pixels in the cells the corners left free, and every one of them gets an oriented ORB
+  descriptor at its own pixel, so the same points serve the direct side (patch) and the indirect side (descriptor).
+
+  Corner budget: at most min(Features::maxCorners, Features::cornerShare x the desired count) corners, so that the
+  gradient pixels, which the photometric window needs on edges and weak texture, keep the rest.
+  Corner cells: each corner occupies the square cell of side 2 x Features::cornerMinDistance (at least 4 pixels)
+  holding it; the gradient selector skips occupied cells and asks for as many fewer pixels as there are corners.
+  With descriptors off (direct tracking) the selection is exactly the gradient selector's, as before.
+
+  Threading: holds scratch buffers; one per thread (the mapper owns one).
+*/
+#ifndef HSLAM_FEATURES_SHARED_POINT_SELECTOR_H
+#define HSLAM_FEATURES_SHARED_POINT_SELECTOR_H
+
+#include "features/BinaryDescriptor.h"
+#include "features/ImagePyramid.h"
+#include "features/PixelSelector.h"
+#include "features/PointDescriptors.h"
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/core/vpImage.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+
+#include <vector>
+
+namespace hslam
+{
+class VISP_EXPORT SharedPointSelector
+{
+public:
+  /*!
+    \param params : selection settings (gradient selector, FAST threshold, corner budget and distance).
+    \param withDescriptors : corners and descriptors on (hybrid / indirect tracking) or off (direct).
+  */
+  SharedPointSelector(const vpHSlamParameters::Features &params, bool withDescriptors);
+
+  /*!
+    Select about \e desiredCount points of a frame: corners (strongest first), then gradient pixels.
+    \param raw : the rectified 8-bit image (corners are detected on it).
+    \param pyramid : its photometric pyramid (gradient selection).
+    \param selected : output pixels, corners first.
+    \param isCorner : output, per selected pixel.
+  */
+  void select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount, unsigned int seed,
+              std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner);
+
+  /*!
+    Oriented ORB descriptors at \e pixels of \e raw (PointDescriptors). \e valid is false for pixels too close to
+    the border; all false (and descriptors zero) when descriptors are off.
+  */
+  void describe(const vpImage<unsigned char> &raw, const std::vector<cv::Point2f> &pixels,
+                std::vector<OrbDescriptor> &descriptors, std::vector<bool> &valid, std::vector<float> &anglesDeg);
+
+  bool withDescriptors() const { return m_withDescriptors; }
+  //! Corners taken by the last select().
+  int lastCorners() const { return m_lastCorners; }
+
+private:
+  vpHSlamParameters::Features m_params;
+  bool m_withDescriptors;
+  PixelSelector m_gradients;
+  PointDescriptors m_descriptors;
+  OccupancyGrid m_grid;
+  std::vector<cv::Point2f> m_corners;
+  std::vector<SelectedPixel> m_gradientPixels;
+  int m_lastCorners = 0;
+};
+} // namespace hslam
+
+#endif

@@ -1,0 +1,56 @@
+/*
+ * H-SLAM for ViSP.
+ */
+// Relocalisation of a lost frame into the current map (SlamSystem, tracking thread). See SlamSystem.h.
+#include "system/SlamSystem.h"
+
+#include "system/LocalMapper.h"
+#include "tracking/Relocalizer.h"
+
+#include <visp3/hslam/vpHSlamLog.h>
+
+namespace hslam
+{
+bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &history)
+{
+  ++m_relocAttempts;
+  m_hybrid->extract(frame->raw);
+  RelocalizationFrame lost;
+  lost.uv.reserve(m_hybrid->keypoints().size());
+  lost.descriptors.reserve(m_hybrid->keypoints().size());
+  for (const FrameKeypoint &k : m_hybrid->keypoints()) {
+    lost.uv.emplace_back(k.u, k.v);
+    lost.descriptors.push_back(k.descriptor);
+  }
+  if (lost.descriptors.empty()) {
+    return false; // nothing to match (covered lens, black frame)
+  }
+  std::vector<RelocalizationKeyframe> candidates;
+  {
+    synchronize(); // nothing is queued while lost; this only waits for a job still running
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    candidates = m_mapper->relocalizationCandidates(lost, m_params.tracking.relocalizationCandidates);
+  }
+  std::vector<const RelocalizationKeyframe *> pointers;
+  for (const RelocalizationKeyframe &k : candidates) {
+    pointers.push_back(&k);
+  }
+  RelocalizerOptions options;
+  options.minInliers = m_params.tracking.relocalizationMinInliers;
+  const RelocalizationResult r = relocalize(lost, pointers, m_preprocessor.intrinsics(), options);
+  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
+                                           << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
+                                           << " tried, keyframe " << r.keyframeId << ", " << r.matches << " matches, "
+                                           << r.inliers << " inliers");
+  if (!r.success) {
+    return false;
+  }
+  // The joint optimisation against the current tracking reference refines (and checks) the pose.
+  const SE3d wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
+  history.valid = true;
+  history.lastMref = r.cTw * wMref;
+  history.prelastMref = history.lastMref;
+  history.lastAffine = m_lastAffine;
+  return true;
+}
+} // namespace hslam

@@ -1,0 +1,125 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "tracking/HybridTracker.h"
+
+#include "features/CornerDetector.h"
+#include "tracking/PoseOnlyOptimizer.h"
+
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+//! The radius is doubled once when too few points match (ORB-SLAM2 TrackWithMotionModel).
+constexpr float kWidenFactor = 2.f;
+//! Projected points closer than this to the new camera are not matched, scene units.
+constexpr double kMinDepth = 1e-6;
+} // namespace
+
+HybridTracker::HybridTracker(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height)
+    : m_params(params.tracking), m_cornerMinDistance(params.features.cornerMinDistance), m_K0(K0), m_width(width),
+      m_height(height)
+{
+}
+
+void HybridTracker::extract(const vpImage<unsigned char> &raw)
+{
+  CornerOptions options;
+  options.threshold = m_params.frameFastThreshold;
+  options.maxCorners = m_params.frameFeatures;
+  options.minDistance = m_cornerMinDistance;
+  options.border = kOrbBorderPx + 1;
+  detectCorners(raw, options, m_pixels);
+  m_descriptors.compute(raw, m_pixels, m_desc, m_valid, &m_angles);
+  m_keypoints.clear();
+  m_keypoints.reserve(m_pixels.size());
+  for (size_t i = 0; i < m_pixels.size(); ++i) {
+    if (!m_valid[i]) {
+      continue;
+    }
+    FrameKeypoint k;
+    k.u = m_pixels[i].x;
+    k.v = m_pixels[i].y;
+    k.angleDeg = m_angles[i];
+    k.descriptor = m_desc[i];
+    m_keypoints.push_back(k);
+  }
+}
+
+bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref,
+                                 IndirectStepResult &out)
+{
+  out = IndirectStepResult();
+  out.newMref = predictedMref;
+  m_projected.clear();
+  m_projectedFeature.clear();
+  const Eigen::Matrix3d R = predictedMref.rotationMatrix();
+  const Eigen::Vector3d t = predictedMref.translation();
+  for (size_t i = 0; i < features.size(); ++i) {
+    const Eigen::Vector3d X = R * features[i].Xref + t;
+    if (!(X.z() > kMinDepth)) {
+      continue;
+    }
+    const double u = m_K0.fx * X.x() / X.z() + m_K0.cx;
+    const double v = m_K0.fy * X.y() / X.z() + m_K0.cy;
+    if (!(u >= 0. && v >= 0. && u <= m_width - 1. && v <= m_height - 1.)) {
+      continue;
+    }
+    ProjectedPoint p;
+    p.u = static_cast<float>(u);
+    p.v = static_cast<float>(v);
+    p.angleDeg = features[i].angleDeg;
+    p.descriptor = features[i].orb;
+    m_projected.push_back(p);
+    m_projectedFeature.push_back(static_cast<int>(i));
+  }
+  out.projected = static_cast<int>(m_projected.size());
+  if (m_projected.empty() || m_keypoints.empty()) {
+    return false;
+  }
+  OrbMatcherOptions options;
+  options.radiusPx = static_cast<float>(m_params.matchRadiusPx);
+  options.maxDistance = m_params.matchMaxDistance;
+  options.ratio = static_cast<float>(m_params.matchRatio);
+  const OrbMatcher matcher(m_keypoints, m_width, m_height, options);
+  out.radiusPx = options.radiusPx;
+  std::vector<OrbMatch> matches = matcher.matchProjected(m_projected);
+  if (static_cast<int>(matches.size()) < m_params.minMatchesBeforeWidening) {
+    out.radiusPx = kWidenFactor * options.radiusPx;
+    std::vector<OrbMatch> wider = matcher.matchProjected(m_projected, out.radiusPx);
+    if (wider.size() > matches.size()) {
+      matches.swap(wider);
+    }
+  }
+  out.matches = static_cast<int>(matches.size());
+  if (out.matches < m_params.minGeometricInliers) {
+    return false;
+  }
+  std::vector<ReprojectionObservation> observations(matches.size());
+  for (size_t i = 0; i < matches.size(); ++i) {
+    const FrameKeypoint &k = m_keypoints[static_cast<size_t>(matches[i].keypoint)];
+    observations[i].wX = features[static_cast<size_t>(m_projectedFeature[static_cast<size_t>(matches[i].point)])].Xref;
+    observations[i].uv = Eigen::Vector2d(k.u, k.v);
+  }
+  const PoseOnlyResult pose = optimizePoseOnly(predictedMref, observations, m_K0);
+  out.inliers = pose.inliers;
+  if (pose.inliers < m_params.minGeometricInliers || !pose.cTw.translation().allFinite()) {
+    return false;
+  }
+  out.newMref = pose.cTw;
+  out.term.Xref.reserve(static_cast<size_t>(pose.inliers));
+  out.term.uv.reserve(static_cast<size_t>(pose.inliers));
+  for (size_t i = 0; i < observations.size(); ++i) {
+    if (pose.inlier[i]) {
+      out.term.Xref.push_back(observations[i].wX);
+      out.term.uv.push_back(observations[i].uv);
+    }
+  }
+  out.term.inliers = pose.inliers;
+  out.term.sigma2Px = pose.inlierRmsePx * pose.inlierRmsePx;
+  out.usable = true;
+  return true;
+}
+} // namespace hslam

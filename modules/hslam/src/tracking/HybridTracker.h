@@ -1,0 +1,76 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file HybridTracker.h
+  \brief The indirect step of hybrid pose tracking (paper section 3.2, step 1) and the keypoints of a new frame.
+
+  extract(): FAST corners of the new frame (spread by CornerDetector) with oriented ORB descriptors at level 0, the
+  same computation as the map points' (descriptor sharing), so that descriptors compare across frames.
+  indirectStep(): the reference's points with descriptors are projected into the new frame with the predicted
+  (constant-velocity) pose and matched by ORB inside a search radius (Hamming threshold, ratio test, rotation
+  consistency: OrbMatcher); when fewer than Tracking::minMatchesBeforeWidening match, the search is repeated with
+  twice the radius. A robust pose-only optimisation of the reprojection error (PoseOnlyOptimizer) gives the pose
+  and the geometric inliers, which form the GeometricTerm of the joint optimisation, with s_g^2 the mean squared
+  reprojection error of those inliers.
+
+  Threading: not thread-safe; one per tracking thread.
+*/
+#ifndef HSLAM_TRACKING_HYBRID_TRACKER_H
+#define HSLAM_TRACKING_HYBRID_TRACKER_H
+
+#include "features/OrbMatcher.h"
+#include "features/PointDescriptors.h"
+#include "tracking/CoarseTracker.h"
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+
+#include <vector>
+
+namespace hslam
+{
+//! Outcome of HybridTracker::indirectStep().
+struct IndirectStepResult {
+  bool usable = false; //!< at least Tracking::minGeometricInliers inliers
+  int projected = 0;   //!< reference points landing in the new image
+  int matches = 0;     //!< ORB matches
+  int inliers = 0;     //!< after the pose-only optimisation
+  float radiusPx = 0.f;
+  SE3d newMref;       //!< pose-only estimate (the prediction when not usable)
+  GeometricTerm term; //!< the inlier matches, for the joint optimisation
+};
+
+class VISP_EXPORT HybridTracker
+{
+public:
+  HybridTracker(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height);
+
+  //! Keypoints and descriptors of a new frame (rectified 8-bit image); replaces the previous ones.
+  void extract(const vpImage<unsigned char> &raw);
+  const std::vector<FrameKeypoint> &keypoints() const { return m_keypoints; }
+
+  /*!
+    Match \e features (reference frame) into the frame given to extract(), starting from \e predictedMref, and
+    estimate the pose from the matches. Returns out.usable.
+  */
+  bool indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref, IndirectStepResult &out);
+
+private:
+  vpHSlamParameters::Tracking m_params;
+  double m_cornerMinDistance;
+  PinholeIntrinsics m_K0;
+  int m_width, m_height;
+  PointDescriptors m_descriptors;
+  std::vector<FrameKeypoint> m_keypoints;
+  // scratch
+  std::vector<cv::Point2f> m_pixels;
+  std::vector<OrbDescriptor> m_desc;
+  std::vector<bool> m_valid;
+  std::vector<float> m_angles;
+  std::vector<ProjectedPoint> m_projected;
+  std::vector<int> m_projectedFeature;
+};
+} // namespace hslam
+
+#endif

@@ -1,0 +1,97 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "tracking/RelocalizationIndex.h"
+
+namespace hslam
+{
+RelocalizationIndex::RelocalizationIndex(const OrbVocabulary &vocabulary)
+    : m_vocabulary(vocabulary), m_database(vocabulary.wordCount())
+{
+}
+
+void RelocalizationIndex::addKeyframe(int id, const std::vector<OrbDescriptor> &descriptors)
+{
+  if (descriptors.empty()) {
+    return;
+  }
+  BowVector bow;
+  m_vocabulary.transform(descriptors, bow);
+  m_database.add(id, bow);
+  m_bowSizes[id] = bow.size();
+}
+
+void RelocalizationIndex::setKeyframePoints(int id, std::vector<Eigen::Vector3d> wX,
+                                            std::vector<OrbDescriptor> descriptors)
+{
+  RelocalizationKeyframe &k = m_points[id];
+  k.id = id;
+  k.wX = std::move(wX);
+  k.descriptors = std::move(descriptors);
+  k.direct.clear(); // indexed when a query needs it
+}
+
+bool RelocalizationIndex::keyframePoints(int id, RelocalizationKeyframe &out) const
+{
+  const auto it = m_points.find(id);
+  if (it == m_points.end()) {
+    return false;
+  }
+  out = it->second;
+  return true;
+}
+
+void RelocalizationIndex::index(RelocalizationKeyframe &keyframe) const
+{
+  BowVector unused;
+  keyframe.direct.clear();
+  if (!keyframe.descriptors.empty()) {
+    m_vocabulary.transform(keyframe.descriptors, unused, keyframe.direct, kDirectIndexLevelsUp);
+  }
+}
+
+void RelocalizationIndex::describeFrame(RelocalizationFrame &frame, BowVector &bow) const
+{
+  bow.clear();
+  frame.direct.clear();
+  if (!frame.descriptors.empty()) {
+    m_vocabulary.transform(frame.descriptors, bow, frame.direct, kDirectIndexLevelsUp);
+  }
+}
+
+std::vector<int> RelocalizationIndex::candidates(const BowVector &bow, int maxCandidates) const
+{
+  std::vector<int> ids;
+  if (bow.empty() || m_database.size() == 0) {
+    return ids;
+  }
+  const std::vector<KeyframeDatabase::Candidate> found = m_database.query(bow, KeyframeDatabase::Query());
+  for (const KeyframeDatabase::Candidate &c : found) {
+    if (static_cast<int>(ids.size()) >= maxCandidates) {
+      break;
+    }
+    ids.push_back(c.id);
+  }
+  return ids;
+}
+
+void RelocalizationIndex::clear()
+{
+  m_database.clear();
+  m_points.clear();
+  m_bowSizes.clear();
+}
+
+double RelocalizationIndex::memoryBytes() const
+{
+  double bytes = 0.;
+  for (const auto &entry : m_bowSizes) {
+    // A BoW entry (word, weight) in the vector and in the inverted index.
+    bytes += static_cast<double>(entry.second) * 2. * (sizeof(std::uint32_t) + sizeof(double));
+  }
+  for (const auto &entry : m_points) {
+    bytes += static_cast<double>(entry.second.wX.size()) * (sizeof(Eigen::Vector3d) + sizeof(OrbDescriptor));
+  }
+  return bytes;
+}
+} // namespace hslam

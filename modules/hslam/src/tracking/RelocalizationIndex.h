@@ -1,0 +1,67 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file RelocalizationIndex.h
+  \brief What relocalisation searches: the keyframes of the current map segment by bag of words, and the map
+  points (world position + ORB descriptor) of those that left the window.
+
+  The mapper adds each new keyframe with the descriptors of the points it selected (BoW vector into a
+  KeyframeDatabase), and stores a snapshot of a keyframe's points when the keyframe is marginalised (their estimate
+  is final then). Points of keyframes still in the window are taken from the window at query time (their estimate
+  still moves). A lost frame's BoW vector queries the database; candidates come best first.
+  A new map segment clears the index: relocalisation is into the same map.
+
+  Threading: not thread-safe; owned by the mapper and used under the system's mapper mutex.
+*/
+#ifndef HSLAM_TRACKING_RELOCALIZATION_INDEX_H
+#define HSLAM_TRACKING_RELOCALIZATION_INDEX_H
+
+#include "features/OrbVocabulary.h"
+#include "loop/KeyframeDatabase.h"
+#include "tracking/Relocalizer.h"
+
+#include <visp3/core/vpConfig.h>
+
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace hslam
+{
+class VISP_EXPORT RelocalizationIndex
+{
+public:
+  //! Levels above the leaves at which the direct index groups features (ORB-SLAM2: 4 with L = 6).
+  static constexpr int kDirectIndexLevelsUp = 4;
+
+  //! \e vocabulary must outlive the index (the system owns it).
+  explicit RelocalizationIndex(const OrbVocabulary &vocabulary);
+
+  //! A new keyframe, with the descriptors of its selected points.
+  void addKeyframe(int id, const std::vector<OrbDescriptor> &descriptors);
+  //! Final points of a marginalised keyframe (world positions and descriptors).
+  void setKeyframePoints(int id, std::vector<Eigen::Vector3d> wX, std::vector<OrbDescriptor> descriptors);
+  //! Stored points of a keyframe (false when it has none yet: still in the window).
+  bool keyframePoints(int id, RelocalizationKeyframe &out) const;
+  //! Fill \e keyframe.direct from its descriptors.
+  void index(RelocalizationKeyframe &keyframe) const;
+  //! BoW vector and direct index of a lost frame's keypoints.
+  void describeFrame(RelocalizationFrame &frame, BowVector &bow) const;
+  //! Keyframe ids best first, at most \e maxCandidates.
+  std::vector<int> candidates(const BowVector &bow, int maxCandidates) const;
+
+  void clear();
+  std::size_t size() const { return m_database.size(); }
+  //! Bytes held (BoW vectors, stored points), an estimate for the memory statistics.
+  double memoryBytes() const;
+
+private:
+  const OrbVocabulary &m_vocabulary;
+  KeyframeDatabase m_database;
+  std::map<int, RelocalizationKeyframe> m_points;
+  std::map<int, std::size_t> m_bowSizes;
+};
+} // namespace hslam
+
+#endif

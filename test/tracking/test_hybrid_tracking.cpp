@@ -1,0 +1,275 @@
+// Hybrid tracking on the synthetic scene with exact depths: corner selection, the indirect step (ORB matches of
+// reference corners into a new frame, pose-only optimisation), the joint photometric + geometric optimisation
+// (recovered pose, Jacobians against numeric differences, indirect-only ablation) and shared point selection.
+#include "HSlamTestData.h"
+#include "TrackingTestUtils.h"
+
+#include "features/CornerDetector.h"
+#include "features/PointDescriptors.h"
+#include "features/SharedPointSelector.h"
+#include "tracking/HybridTracker.h"
+#include "tracking/PoseOnlyOptimizer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace hslam;
+
+namespace
+{
+constexpr unsigned int kWidth = 640;
+constexpr unsigned int kHeight = 480;
+constexpr unsigned int kFrames = 100;
+
+#define REQUIRE_TEXTURES()                                                                                             \
+  if (hslam_test::vispImagesDir().empty()) {                                                                           \
+    GTEST_SKIP() << "visp-images-data not installed (/usr/share/visp-images-data/ViSP-images)";                        \
+  }
+
+class HybridTrackingTest : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    if (hslam_test::vispImagesDir().empty()) {
+      return;
+    }
+    scene.configure(kWidth, kHeight, kFrames, 30.0, 1);
+    hslam_test::makeFrame(scene, 0, params.tracker, reference);
+    points = hslam_test::selectPoints(scene, 0, reference, 2000);
+    K = hslam_test::sceneIntrinsics(scene);
+    // Reference features: FAST corners of frame 0 with their exact 3D position and descriptor.
+    CornerOptions options;
+    options.border = kOrbBorderPx + 1;
+    std::vector<cv::Point2f> corners;
+    detectCorners(reference.raw, options, corners);
+    PointDescriptors describer;
+    std::vector<OrbDescriptor> descriptors;
+    std::vector<bool> valid;
+    std::vector<float> angles;
+    describer.compute(reference.raw, corners, descriptors, valid, &angles);
+    for (size_t i = 0; i < corners.size(); ++i) {
+      if (!valid[i]) {
+        continue;
+      }
+      const double z = scene.depthAt(corners[i].x, corners[i].y, 0);
+      ReferenceFeature f;
+      f.Xref = Eigen::Vector3d((corners[i].x - K.cx) / K.fx * z, (corners[i].y - K.cy) / K.fy * z, z);
+      f.orb = descriptors[i];
+      f.angleDeg = angles[i];
+      features.push_back(f);
+    }
+  }
+
+  vpHSlamParameters params;
+  vpHSlamSyntheticScene scene;
+  Frame reference;
+  std::vector<CoarseTrackerPoint> points;
+  std::vector<ReferenceFeature> features;
+  PinholeIntrinsics K;
+};
+
+//! A geometric term of \e n points seen from \e truth, pixels disturbed by \e noise (standard deviation, pixels).
+GeometricTerm syntheticTerm(const SE3d &truth, const PinholeIntrinsics &K, int n, double noise, unsigned seed)
+{
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> xy(-1.5, 1.5), depth(2., 6.);
+  std::normal_distribution<double> pixel(0., noise);
+  GeometricTerm term;
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d X(xy(rng), xy(rng), depth(rng));
+    const Eigen::Vector3d c = truth * X;
+    term.Xref.push_back(X);
+    term.uv.emplace_back(K.fx * c.x() / c.z() + K.cx + pixel(rng), K.fy * c.y() / c.z() + K.cy + pixel(rng));
+  }
+  term.inliers = n;
+  term.sigma2Px = std::max(noise * noise, 0.25);
+  return term;
+}
+} // namespace
+
+TEST(HybridTrackingMath, geometricWeightFollowsEquation4)
+{
+  // K = 5 exp(-2 l) / (1 + exp((30 - N_g) / 4)), l the pyramid level (0 = full resolution).
+  EXPECT_NEAR(geometricWeight(0, 30), 2.5, 1e-12);
+  EXPECT_NEAR(geometricWeight(2, 30), 2.5 * std::exp(-4.), 1e-12);
+  EXPECT_NEAR(geometricWeight(0, 10), 5. / (1. + std::exp(5.)), 1e-12);
+  EXPECT_GT(geometricWeight(0, 100), 4.99);
+}
+
+TEST(HybridTrackingMath, geometricJacobianMatchesNumericDifferences)
+{
+  PinholeIntrinsics K;
+  K.fx = 500.;
+  K.fy = 480.;
+  K.cx = 320.;
+  K.cy = 240.;
+  const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.1, -0.05, 0.2, 0.03, -0.02, 0.05).finished());
+  // Noise of 3 pixels puts some residuals past the Huber threshold: both branches are checked.
+  const GeometricTerm term = syntheticTerm(truth, K, 60, 3., 7);
+  const SE3d at =
+      SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.01, 0.01, -0.01, 0.002, 0.001, -0.003).finished()) * truth;
+  Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
+  CoarseTracker::geometricEnergy(term, K, at, &H, &b);
+  const double eps = 1e-6;
+  for (int i = 0; i < 6; ++i) {
+    Eigen::Matrix<double, 6, 1> d = Eigen::Matrix<double, 6, 1>::Zero();
+    d[i] = eps;
+    const double ep = CoarseTracker::geometricEnergy(term, K, SE3d::exp(d) * at);
+    const double em = CoarseTracker::geometricEnergy(term, K, SE3d::exp(-d) * at);
+    const double numeric = (ep - em) / (2. * eps);
+    // Energy = sum of rho(r^2): its gradient is 2 J^T W r = 2 b.
+    EXPECT_NEAR(2. * b[i], numeric, 1e-4 * std::max(1., std::fabs(numeric))) << "twist component " << i;
+  }
+  EXPECT_TRUE(H.bottomRows<2>().isZero()) << "the geometric term must not touch the affine parameters";
+  const double det = H.topLeftCorner<6, 6>().determinant();
+  EXPECT_GT(det, 0.);
+}
+
+TEST_F(HybridTrackingTest, cornersAreSpreadAndKeepTheirDistance)
+{
+  REQUIRE_TEXTURES();
+  CornerOptions options;
+  options.maxCorners = 300;
+  options.minDistance = 6.;
+  options.border = 20;
+  std::vector<cv::Point2f> corners;
+  std::vector<float> responses;
+  detectCorners(reference.raw, options, corners, &responses);
+  ASSERT_GT(corners.size(), 100u);
+  EXPECT_LE(corners.size(), 300u);
+  for (size_t i = 0; i < corners.size(); ++i) {
+    EXPECT_GE(corners[i].x, 20.f);
+    EXPECT_GE(corners[i].y, 20.f);
+    EXPECT_LE(corners[i].x, kWidth - 21.f);
+    EXPECT_LE(corners[i].y, kHeight - 21.f);
+    for (size_t j = i + 1; j < corners.size(); ++j) {
+      const double d = std::hypot(corners[i].x - corners[j].x, corners[i].y - corners[j].y);
+      ASSERT_GE(d, 6.) << "corners " << i << " and " << j;
+    }
+  }
+  // Spread: no quarter of the image holds more than 60 % of the corners.
+  int quarter[4] = {0, 0, 0, 0};
+  for (const cv::Point2f &c : corners) {
+    ++quarter[(c.x < kWidth / 2 ? 0 : 1) + (c.y < kHeight / 2 ? 0 : 2)];
+  }
+  for (int q : quarter) {
+    EXPECT_LT(q, static_cast<int>(0.6 * corners.size()));
+  }
+  std::vector<cv::Point2f> again;
+  detectCorners(reference.raw, options, again);
+  EXPECT_EQ(again, corners) << "detection must be deterministic";
+}
+
+TEST_F(HybridTrackingTest, sharedSelectionPutsCornersFirstWithinTheirShare)
+{
+  REQUIRE_TEXTURES();
+  vpHSlamParameters::Features f = params.features;
+  f.cornerShare = 0.4;
+  SharedPointSelector shared(f, true);
+  std::vector<SelectedPixel> selected;
+  std::vector<bool> isCorner;
+  shared.select(reference.raw, reference.pyramid, 1000, 3, selected, isCorner);
+  ASSERT_EQ(selected.size(), isCorner.size());
+  ASSERT_GT(shared.lastCorners(), 100);
+  EXPECT_LE(shared.lastCorners(), 400);
+  for (int i = 0; i < shared.lastCorners(); ++i) {
+    EXPECT_TRUE(isCorner[static_cast<size_t>(i)]);
+  }
+  EXPECT_GT(selected.size(), static_cast<size_t>(shared.lastCorners()) + 300) << "gradient pixels fill the rest";
+  // Descriptors off (direct tracking): exactly the gradient selector's output.
+  SharedPointSelector direct(f, false);
+  PixelSelector plain(f);
+  std::vector<SelectedPixel> a, b;
+  std::vector<bool> flags;
+  direct.select(reference.raw, reference.pyramid, 1000, 3, a, flags);
+  plain.select(reference.pyramid, 1000, 3, b);
+  ASSERT_EQ(a.size(), b.size());
+  for (size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].u, b[i].u);
+    EXPECT_EQ(a[i].v, b[i].v);
+    EXPECT_FALSE(flags[i]);
+  }
+}
+
+TEST_F(HybridTrackingTest, indirectStepMatchesAndRecoversThePose)
+{
+  REQUIRE_TEXTURES();
+  ASSERT_GT(features.size(), 200u);
+  HybridTracker hybrid(params, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
+  for (unsigned int target : {5u, 10u}) {
+    Frame frame;
+    hslam_test::makeFrame(scene, target, params.tracker, frame);
+    hybrid.extract(frame.raw);
+    ASSERT_GT(hybrid.keypoints().size(), 200u);
+    const SE3d truth = hslam_test::groundTruthNewMref(scene, 0, target);
+    // Predicted pose off by ~ 2 cm and ~ 0.6 degree (a constant-velocity guess).
+    const SE3d predicted =
+        SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.02, -0.01, 0.01, 0.01, 0.005, -0.004).finished()) * truth;
+    IndirectStepResult out;
+    ASSERT_TRUE(hybrid.indirectStep(features, predicted, out)) << "frame " << target;
+    EXPECT_GT(out.matches, 100) << "frame " << target;
+    EXPECT_GT(static_cast<double>(out.inliers) / out.matches, 0.8) << "inlier ratio, frame " << target;
+    double dt = 0., dr = 0.;
+    hslam_test::poseError(out.newMref, truth, dt, dr);
+    EXPECT_LT(dt, 5e-3) << "frame " << target;
+    EXPECT_LT(dr, 0.1) << "frame " << target;
+    EXPECT_EQ(out.term.Xref.size(), static_cast<size_t>(out.inliers));
+    EXPECT_GT(out.term.sigma2Px, 0.);
+    EXPECT_LT(out.term.sigma2Px, 2.);
+  }
+}
+
+TEST_F(HybridTrackingTest, jointOptimisationRecoversAPerturbedPose)
+{
+  REQUIRE_TEXTURES();
+  const unsigned int target = 10;
+  Frame frame;
+  hslam_test::makeFrame(scene, target, params.tracker, frame);
+  const SE3d truth = hslam_test::groundTruthNewMref(scene, 0, target);
+  HybridTracker hybrid(params, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
+  hybrid.extract(frame.raw);
+  const SE3d start =
+      SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.03, -0.02, 0.02, 0.01, -0.01, 0.008).finished()) * truth;
+  IndirectStepResult indirect;
+  ASSERT_TRUE(hybrid.indirectStep(features, start, indirect));
+  for (bool geometryOnly : {false, true}) {
+    CoarseTracker tracker(params.tracker);
+    tracker.setReference(reference, points);
+    indirect.term.poseFromGeometryOnly = geometryOnly;
+    tracker.setGeometricTerm(&indirect.term);
+    SE3d newMref = start;
+    AffineBrightness affine;
+    CoarseTrackingResult result;
+    ASSERT_TRUE(tracker.track(frame, newMref, affine, result)) << coarseTrackingStatusName(result.status);
+    double dt = 0., dr = 0.;
+    hslam_test::poseError(newMref, truth, dt, dr);
+    EXPECT_LT(dt, geometryOnly ? 5e-3 : 2e-3) << (geometryOnly ? "indirect" : "hybrid");
+    EXPECT_LT(dr, geometryOnly ? 0.1 : 0.05) << (geometryOnly ? "indirect" : "hybrid");
+    EXPECT_NEAR(result.geometricWeight, geometricWeight(0, indirect.term.inliers), 1e-12);
+  }
+}
+
+TEST(HybridTrackingMath, geometryOnlyTermRecoversPoseWithoutPhotometricHelp)
+{
+  // Pure geometry: the geometric energy alone, minimised by Gauss-Newton, returns to the truth.
+  PinholeIntrinsics K;
+  K.fx = K.fy = 500.;
+  K.cx = 320.;
+  K.cy = 240.;
+  const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, 0.1, -0.1, 0.05, 0.02, -0.03).finished());
+  const GeometricTerm term = syntheticTerm(truth, K, 80, 0.5, 11);
+  SE3d pose = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.05, -0.05, 0.05, 0.02, 0.02, 0.02).finished()) * truth;
+  for (int it = 0; it < 10; ++it) {
+    Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
+    CoarseTracker::geometricEnergy(term, K, pose, &H, &b);
+    const Eigen::Matrix<double, 6, 1> step = H.topLeftCorner<6, 6>().ldlt().solve(-b.head<6>());
+    pose = SE3d::exp(step) * pose;
+  }
+  EXPECT_LT((pose.translation() - truth.translation()).norm(), 0.01);
+  EXPECT_LT((pose * truth.inverse()).log().tail<3>().norm(), 1e-3);
+}
