@@ -458,7 +458,7 @@ TEST(Parameters, ModeNames)
     EXPECT_EQ(vpHSlamParameters::parseTrackingMode(vpHSlamParameters::trackingModeName(mode)), mode);
   }
   EXPECT_EQ(vpHSlamParameters::trackingModeName(vpHSlamParameters::trackingHybrid), "hybrid");
-  EXPECT_EQ(vpHSlamParameters().tracking.mode, vpHSlamParameters::trackingHybrid);
+  EXPECT_EQ(vpHSlamParameters().tracking.mode, vpHSlamParameters::trackingDirect);
   ExpectError([] { vpHSlamParameters::parseTrackingMode("dso"); }, vpHSlamException::invalidArgument, {"dso"});
 }
 

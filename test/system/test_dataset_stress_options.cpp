@@ -91,6 +91,29 @@ TEST(DatasetStressOptions, TrackingModeOverridesTheConfiguration)
   std::remove(saved.c_str());
 }
 
+TEST(DatasetStressOptions, SetChangesOneSettingAfterTheConfiguration)
+{
+  HSLAM_REQUIRE_DATASET_TUTORIAL();
+  const std::string config = scratch("set.yaml"), saved = scratch("set-saved.yaml");
+  std::ofstream(config) << "%YAML:1.0\ntracking:\n  mode: indirect\nfeatures:\n  maxCorners: 300\n";
+  runTutorial("--input /nonexistent --no-display --config " + config +
+              " --set tracking.mode=hybrid --set features.desiredImmatureDensity=490 --save-config " + saved);
+  const std::string yaml = hslam_test::readTextFile(saved);
+  EXPECT_NE(yaml.find("  mode: hybrid\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("  desiredImmatureDensity: 490\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("  maxCorners: 300\n"), std::string::npos) << "the rest of --config is kept\n" << yaml;
+  std::remove(config.c_str());
+  std::remove(saved.c_str());
+  // Malformed: refused while parsing; unknown key or bad value: the loader's message, naming the key.
+  expectRefused("--set tracking", "--set", "tracking");
+  const hslam_test::ProgramRun r = runTutorial("--input /nonexistent --no-display --set tracking.nope=1");
+  EXPECT_NE(r.exitCode, 0);
+  EXPECT_NE(r.output.find("unknown key 'nope'"), std::string::npos) << r.output;
+  const hslam_test::ProgramRun range = runTutorial("--input /nonexistent --no-display --set mapper.windowSize=1");
+  EXPECT_NE(range.exitCode, 0);
+  EXPECT_NE(range.output.find("mapper.windowSize"), std::string::npos) << range.output;
+}
+
 TEST(DatasetStressOptions, StrideFeedsEveryKthFrame)
 {
   HSLAM_REQUIRE_DATASET_TUTORIAL();

@@ -2,7 +2,11 @@
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <unistd.h>
+
 #include <exception>
+#include <filesystem>
+#include <fstream>
 
 namespace hslam_dataset
 {
@@ -96,7 +100,8 @@ void printUsage(const char *program, std::ostream &out)
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--fps HZ]\n"
          "       [--mode vo-strict] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed X]\n"
-         "       [--config FILE.yaml] [--save-config FILE.yaml] [--trajectory OUT.txt] [--keyframes OUT.txt]\n"
+         "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
+         "[--keyframes OUT.txt]\n"
          "       [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
          "       [--screenshot FILE.png] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
@@ -119,13 +124,15 @@ void printUsage(const char *program, std::ostream &out)
          "  --fps HZ           frame rate of image folders and videos (default 30)\n"
          "  --mode NAME        vo-strict (window only, DSO-like; the only mode implemented so far)\n"
          "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
-         "                     default: tracking.mode of --config, else hybrid\n"
+         "                     default: tracking.mode of --config, else direct\n"
          "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
          "                     mapping in its own thread)\n"
          "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
          "                     would (default 1; 0 = as fast as possible). Ignored with --deterministic\n"
          "  --config FILE      settings (YAML, see vpHSlamParameters); command-line options override it;\n"
          "                     data/hslam-fast.yaml is a real-time preset (DSO defaults otherwise)\n"
+         "  --set S.K=V        one setting (section.key=value, as in the YAML file), after --config; repeatable,\n"
+         "                     e.g. --set features.desiredImmatureDensity=490 --set tracking.relocalize=false\n"
          "  --save-config FILE write the settings in use (YAML)\n"
          "  --trajectory FILE  every frame with a pose, TUM format (t tx ty tz qx qy qz qw), camera-to-world;\n"
          "                     when tracking was lost and a new map segment started, FILE.segN.txt per segment too\n"
@@ -182,6 +189,15 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.options.frameRate = parsePositive(option, value());
     } else if (option == "--mode") {
       args.mode = value();
+    } else if (option == "--set") {
+      const std::string text = value();
+      const std::size_t dot = text.find('.'), eq = text.find('=');
+      if (dot == std::string::npos || eq == std::string::npos || dot == 0 || eq < dot + 2 || eq + 1 == text.size() ||
+          text.find_first_of("\n\r:#") != std::string::npos) {
+        throw vpHSlamException(vpHSlamException::invalidArgument,
+                               "--set expects SECTION.KEY=VALUE (e.g. tracking.mode=hybrid), got '" + text + "'");
+      }
+      args.settings.push_back(text);
     } else if (option == "--tracking-mode") {
       args.trackingMode = value();
       checkTrackingMode(args.trackingMode);
@@ -225,6 +241,28 @@ vpHSlamParameters makeParameters(const Arguments &args)
   vpHSlamParameters params;
   if (!args.config.empty()) {
     params.load(args.config);
+  }
+  for (const std::string &setting : args.settings) {
+    // Read through the YAML loader (same checks and messages as a file): one section, one key.
+    const std::size_t dot = setting.find('.'), eq = setting.find('=');
+    const std::filesystem::path file = std::filesystem::temp_directory_path() /
+                                       ("hslam-set-" + std::to_string(static_cast<long long>(::getpid())) + ".yaml");
+    {
+      std::ofstream out(file);
+      out << "%YAML:1.0\n---\n"
+          << setting.substr(0, dot) << ":\n  " << setting.substr(dot + 1, eq - dot - 1) << ": "
+          << setting.substr(eq + 1) << "\n";
+    }
+    try {
+      params.load(file.string());
+    } catch (const vpHSlamException &e) {
+      std::error_code ignored;
+      std::filesystem::remove(file, ignored);
+      throw vpHSlamException(static_cast<vpHSlamException::ErrorCode>(e.getCode()),
+                             "--set " + setting + ": " + e.getStringMessage());
+    }
+    std::error_code ignored;
+    std::filesystem::remove(file, ignored);
   }
   const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
   if (mode != vpHSlamParameters::modeVoStrict) {

@@ -8,6 +8,7 @@
 
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace hslam_dataset
 {
@@ -29,7 +30,8 @@ struct Arguments {
   std::string input;
   vpHSlamImageSource::Options options;
   std::string mode = "vo-strict";
-  std::string trackingMode; //!< direct, indirect or hybrid; empty: as --config (or the default) says
+  std::string trackingMode;          //!< direct, indirect or hybrid; empty: as --config (or the default) says
+  std::vector<std::string> settings; //!< --set SECTION.KEY=VALUE, in order (applied after --config)
   bool deterministic = false;
   double speed = 1.; //!< real-time mode: play the sequence at this multiple of its frame rate (0: no pacing)
   //! Only frames whose source index is a multiple of this are given to tracking (large inter-frame motion).
@@ -67,7 +69,8 @@ void printUsage(const char *program, std::ostream &out);
 Arguments parseArguments(int argc, const char *const argv[]);
 
 /*!
-  Settings: defaults, then --config, then the command line (--mode, --tracking-mode, --deterministic); validated.
+  Settings: defaults, then --config, then --set, then the command line (--mode, --tracking-mode, --deterministic);
+  validated.
   \exception vpHSlamException when the configuration cannot be read, a name is unknown or a mode is not
   implemented.
 */

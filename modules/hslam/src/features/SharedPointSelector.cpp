@@ -22,12 +22,13 @@ SharedPointSelector::SharedPointSelector(const vpHSlamParameters::Features &para
 }
 
 void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount,
-                                 unsigned int seed, std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner)
+                                 unsigned int seed, std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner,
+                                 bool withCorners)
 {
   selected.clear();
   isCorner.clear();
   m_lastCorners = 0;
-  if (!m_withDescriptors || m_params.maxCorners <= 0) {
+  if (!m_withDescriptors || !withCorners || m_params.maxCorners <= 0) {
     m_gradients.select(pyramid, desiredCount, seed, selected);
     isCorner.assign(selected.size(), false);
     return;

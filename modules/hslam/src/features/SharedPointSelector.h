@@ -46,9 +46,10 @@ public:
     \param pyramid : its photometric pyramid (gradient selection).
     \param selected : output pixels, corners first.
     \param isCorner : output, per selected pixel.
+    \param withCorners : false: gradient pixels only (descriptors are still computed by describe()).
   */
   void select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount, unsigned int seed,
-              std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner);
+              std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner, bool withCorners = true);
 
   /*!
     Oriented ORB descriptors at \e pixels of \e raw (PointDescriptors). \e valid is false for pixels too close to

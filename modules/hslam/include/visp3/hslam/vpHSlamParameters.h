@@ -53,7 +53,7 @@ public:
   enum TrackingMode {
     trackingDirect,   //!< photometric error only (DSO's coarse tracker; no descriptors are computed)
     trackingIndirect, //!< reprojection error of ORB matches only (the photometric side still estimates (a, b))
-    trackingHybrid    //!< both, weighted by the paper's eq. 4 (default)
+    trackingHybrid    //!< both, weighted by the paper's eq. 4
   };
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
@@ -132,9 +132,12 @@ public:
     Hybrid pose tracking: descriptor sharing, ORB matching of the map into the new frame, joint photometric and
     geometric optimisation, relocalisation (paper sections 3.1, 3.2). Matching defaults are ORB-SLAM2's tracking
     values; the others were measured on the shared sequences (README, "Hybrid tracking").
+    The default tracking mode is direct: measured on the shared sequences (README, tutorials/hslam-hybrid-benchmark.sh),
+    hybrid is not yet as accurate as direct nor more robust to large motion, so it is not what users get until it
+    is. Relocalisation needs hybrid or indirect tracking (descriptors).
   */
   struct Tracking {
-    TrackingMode mode = trackingHybrid; //!< direct, indirect or hybrid
+    TrackingMode mode = trackingDirect; //!< direct, indirect or hybrid (see above why direct is the default)
     int frameFeatures = 1000;           //!< FAST corners described per new frame for matching (ORB-SLAM2: 1000)
     int frameFastThreshold = 7;         //!< FAST threshold on new frames, intensity units (as features.fastThreshold)
     double matchRadiusPx = 15.;         //!< search radius around a predicted pixel, pixels (ORB-SLAM2: 15 at 640x480)
