@@ -96,7 +96,7 @@ const Field kFields[] = {
   HSLAM_PARAM(features, fastThreshold, between(1, 255), "FAST intensity threshold"),
   HSLAM_PARAM(features, maxCorners, atLeast(0), "FAST corners kept per keyframe"),
   HSLAM_PARAM(features, cornerMinDistance, atLeast(0.), "non-maximum suppression radius of corners, pixels"),
-  HSLAM_PARAM(features, cornerShare, between(0., 1.), "hybrid: at most this share of new points are corners"),
+  HSLAM_PARAM(features, cornerShare, between(0., 1.), "hybrid: corners added, at most this share of the budget"),
 
   HSLAM_PARAM(tracker, maxPyramidLevels, atLeast(1), "upper bound on pyramid levels"),
   HSLAM_PARAM(tracker, minCoarsestPixels, atLeast(1), "a level is added only while it keeps this many pixels"),

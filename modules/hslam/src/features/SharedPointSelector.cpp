@@ -10,12 +10,6 @@
 
 namespace hslam
 {
-namespace
-{
-//! Smallest corner cell, pixels (a cell of 2 x 2 would leave the gradient selector almost nothing to skip).
-constexpr int kMinCornerCellPx = 4;
-} // namespace
-
 SharedPointSelector::SharedPointSelector(const vpHSlamParameters::Features &params, bool withDescriptors)
     : m_params(params), m_withDescriptors(withDescriptors), m_gradients(params)
 {
@@ -40,9 +34,7 @@ void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImageP
   options.minDistance = m_params.cornerMinDistance;
   options.border = kOrbBorderPx + 1; // every corner gets a descriptor
   detectCorners(raw, options, m_corners);
-  const int width = pyramid.level(0).width, height = pyramid.level(0).height;
-  const int cell = std::max(kMinCornerCellPx, static_cast<int>(std::lround(2. * m_params.cornerMinDistance)));
-  m_grid.reset(width, height, cell);
+  const int width = pyramid.level(0).width;
   selected.reserve(static_cast<size_t>(desiredCount) + m_corners.size());
   for (const cv::Point2f &c : m_corners) {
     SelectedPixel px;
@@ -50,15 +42,22 @@ void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImageP
     px.v = static_cast<int>(std::lround(c.y));
     px.level = 0;
     selected.push_back(px);
-    m_grid.markPoint(c.x, c.y);
   }
   m_lastCorners = static_cast<int>(m_corners.size());
   isCorner.assign(selected.size(), true);
-  if (desiredCount > m_lastCorners) {
-    m_gradients.select(pyramid, desiredCount, seed, m_gradientPixels, &m_grid);
-    selected.insert(selected.end(), m_gradientPixels.begin(), m_gradientPixels.end());
-    isCorner.resize(selected.size(), false);
+  // The gradient selector keeps its whole budget (corners come on top): taking cells away from it cost accuracy
+  // (see the file comment). A gradient pixel on a corner's own pixel is dropped (the point exists already).
+  m_gradients.select(pyramid, desiredCount, seed, m_gradientPixels);
+  m_cornerPixels.clear();
+  for (const SelectedPixel &c : selected) {
+    m_cornerPixels.insert(static_cast<long long>(c.v) * width + c.u);
   }
+  for (const SelectedPixel &px : m_gradientPixels) {
+    if (m_cornerPixels.count(static_cast<long long>(px.v) * width + px.u) == 0) {
+      selected.push_back(px);
+    }
+  }
+  isCorner.resize(selected.size(), false);
 }
 
 void SharedPointSelector::describe(const vpImage<unsigned char> &raw, const std::vector<cv::Point2f> &pixels,

@@ -448,7 +448,7 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     double wp = 1., wg = 0.;
     if (joint) {
       const double sp2 = std::max(statsOld.energy / statsOld.numTerms, kMinPhotometricVariance);
-      const double K = geometricWeight(lvl, m_geometric->inliers);
+      const double K = geometricWeight(levels - 1 - lvl, m_geometric->inliers);
       wp = 1. / sp2;
       wg = (m_geometric->poseFromGeometryOnly ? 1. : K) /
            (static_cast<double>(m_geometric->Xref.size()) * std::max(m_geometric->sigma2Px, kMinGeometricVariance));

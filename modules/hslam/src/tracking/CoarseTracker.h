@@ -81,7 +81,7 @@ struct ReferenceFeature {
 /*!
   The geometric half of the joint pose optimisation (paper eq. 1-4): ORB matches kept as inliers by the indirect
   step, each a point in the reference frame and the level-0 pixel it matched in the new frame. track() then
-  minimises, per pyramid level l (0 = full resolution, see geometricWeight()),
+  minimises, per pyramid level (l counted from the coarsest level used, see geometricWeight()),
       E_p / (n_p s_p^2) + K_l E_g / (n_g s_g^2),   K_l = geometricWeight(l, inliers)
   with E_p the photometric energy (mean taken as today), s_p^2 the mean photometric energy per residual at the
   start of the level (estimated from this frame's residuals), E_g the Huber-robust sum of squared reprojection

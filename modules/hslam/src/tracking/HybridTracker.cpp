@@ -5,6 +5,7 @@
 
 #include "features/CornerDetector.h"
 #include "tracking/PoseOnlyOptimizer.h"
+#include "tracking/Relocalizer.h"
 
 #include <cmath>
 
@@ -48,15 +49,12 @@ void HybridTracker::extract(const vpImage<unsigned char> &raw)
   }
 }
 
-bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref,
-                                 IndirectStepResult &out)
+void HybridTracker::project(const std::vector<ReferenceFeature> &features, const SE3d &newMref)
 {
-  out = IndirectStepResult();
-  out.newMref = predictedMref;
   m_projected.clear();
   m_projectedFeature.clear();
-  const Eigen::Matrix3d R = predictedMref.rotationMatrix();
-  const Eigen::Vector3d t = predictedMref.translation();
+  const Eigen::Matrix3d R = newMref.rotationMatrix();
+  const Eigen::Vector3d t = newMref.translation();
   for (size_t i = 0; i < features.size(); ++i) {
     const Eigen::Vector3d X = R * features[i].Xref + t;
     if (!(X.z() > kMinDepth)) {
@@ -75,6 +73,43 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
     m_projected.push_back(p);
     m_projectedFeature.push_back(static_cast<int>(i));
   }
+}
+
+bool HybridTracker::recoverFromLargeMotion(const std::vector<ReferenceFeature> &features, SE3d &newMref) const
+{
+  // The reference's corners against every keypoint (no prediction), then PnP RANSAC and the pose-only refinement:
+  // the relocaliser's machinery with the tracking reference as the only candidate.
+  RelocalizationKeyframe reference;
+  reference.wX.reserve(features.size());
+  reference.descriptors.reserve(features.size());
+  for (const ReferenceFeature &f : features) {
+    reference.wX.push_back(f.Xref);
+    reference.descriptors.push_back(f.orb);
+  }
+  RelocalizationFrame frame;
+  frame.uv.reserve(m_keypoints.size());
+  frame.descriptors.reserve(m_keypoints.size());
+  for (const FrameKeypoint &k : m_keypoints) {
+    frame.uv.emplace_back(k.u, k.v);
+    frame.descriptors.push_back(k.descriptor);
+  }
+  RelocalizerOptions options;
+  options.minMatches = m_params.minMatchesBeforeWidening;
+  options.minInliers = m_params.minMatchesBeforeWidening;
+  const RelocalizationResult r = relocalize(frame, {&reference}, m_K0, options);
+  if (!r.success) {
+    return false;
+  }
+  newMref = r.cTw;
+  return true;
+}
+
+bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref,
+                                 IndirectStepResult &out)
+{
+  out = IndirectStepResult();
+  out.newMref = predictedMref;
+  project(features, predictedMref);
   out.projected = static_cast<int>(m_projected.size());
   if (m_projected.empty() || m_keypoints.empty()) {
     return false;
@@ -94,6 +129,16 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
     }
   }
   out.matches = static_cast<int>(matches.size());
+  SE3d start = predictedMref;
+  if (out.matches < m_params.minMatchesBeforeWidening && recoverFromLargeMotion(features, start)) {
+    // The prediction was too far off for a search around it (fast motion, skipped frames): matching without a
+    // prediction gave a pose; the guided search is run again around it.
+    out.recovered = true;
+    out.newMref = start;
+    project(features, start);
+    matches = matcher.matchProjected(m_projected); // indices refer to the new projection
+    out.matches = static_cast<int>(matches.size());
+  }
   if (out.matches < m_params.minGeometricInliers) {
     return false;
   }
@@ -103,7 +148,7 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
     observations[i].wX = features[static_cast<size_t>(m_projectedFeature[static_cast<size_t>(matches[i].point)])].Xref;
     observations[i].uv = Eigen::Vector2d(k.u, k.v);
   }
-  const PoseOnlyResult pose = optimizePoseOnly(predictedMref, observations, m_K0);
+  const PoseOnlyResult pose = optimizePoseOnly(start, observations, m_K0);
   out.inliers = pose.inliers;
   if (pose.inliers < m_params.minGeometricInliers || !pose.cTw.translation().allFinite()) {
     return false;

@@ -10,9 +10,12 @@
   indirectStep(): the reference's points with descriptors are projected into the new frame with the predicted
   (constant-velocity) pose and matched by ORB inside a search radius (Hamming threshold, ratio test, rotation
   consistency: OrbMatcher); when fewer than Tracking::minMatchesBeforeWidening match, the search is repeated with
-  twice the radius. A robust pose-only optimisation of the reprojection error (PoseOnlyOptimizer) gives the pose
-  and the geometric inliers, which form the GeometricTerm of the joint optimisation, with s_g^2 the mean squared
-  reprojection error of those inliers.
+  twice the radius, and when that still fails, the points are matched to every keypoint by descriptor alone and a
+  PnP RANSAC gives the start of a new guided search (ORB-SLAM2 tracks against the reference keyframe by BoW in that
+  case; here exhaustive matching, a few hundred corners against a thousand keypoints, well under a millisecond). A
+  robust pose-only optimisation of the reprojection error (PoseOnlyOptimizer) gives the pose and the geometric inliers,
+  which form the GeometricTerm of the joint optimisation, with s_g^2 the mean squared reprojection error of those
+  inliers.
 
   Threading: not thread-safe; one per tracking thread.
 */
@@ -37,8 +40,9 @@ struct IndirectStepResult {
   int matches = 0;     //!< ORB matches
   int inliers = 0;     //!< after the pose-only optimisation
   float radiusPx = 0.f;
-  SE3d newMref;       //!< pose-only estimate (the prediction when not usable)
-  GeometricTerm term; //!< the inlier matches, for the joint optimisation
+  bool recovered = false; //!< the prediction was abandoned for a pose found without one (large motion)
+  SE3d newMref;           //!< pose-only estimate (the prediction when not usable)
+  GeometricTerm term;     //!< the inlier matches, for the joint optimisation
 };
 
 class VISP_EXPORT HybridTracker
@@ -57,6 +61,14 @@ public:
   bool indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref, IndirectStepResult &out);
 
 private:
+  //! Fill m_projected / m_projectedFeature with the features landing in the image at \e newMref.
+  void project(const std::vector<ReferenceFeature> &features, const SE3d &newMref);
+  /*!
+    Too few matches around the prediction: match the features to every keypoint by descriptor alone, PnP RANSAC,
+    pose-only refinement. Returns false when that does not give Tracking::minMatchesBeforeWidening inliers.
+  */
+  bool recoverFromLargeMotion(const std::vector<ReferenceFeature> &features, SE3d &newMref) const;
+
   vpHSlamParameters::Tracking m_params;
   double m_cornerMinDistance;
   PinholeIntrinsics m_K0;

@@ -67,7 +67,7 @@ public:
     int fastThreshold = 7;                      //!< FAST intensity threshold (ARCHITECTURE.md)
     int maxCorners = 1000;                      //!< FAST corners kept per keyframe
     double cornerMinDistance = 4.;              //!< non-maximum suppression radius between corners, pixels
-    double cornerShare = 0.5; //!< hybrid: at most this share of a keyframe's new points are corners (measured)
+    double cornerShare = 0.5; //!< hybrid: corners added per keyframe, at most this share of the gradient budget
   };
 
   //! Direct (and later joint) pose tracking against the newest keyframe.
