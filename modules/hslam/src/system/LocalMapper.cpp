@@ -3,6 +3,8 @@
  */
 #include "system/LocalMapper.h"
 
+#include "system/LocalMapperImpl.h"
+
 #include "features/SharedPointSelector.h"
 #include "mapping/ImmaturePointTracer.h"
 #include "mapping/PointActivation.h"
@@ -26,9 +28,6 @@ namespace
 constexpr int kActivationIterations = 3;
 //! DSO makeCoarseDepthL0: a point's weight in the tracking reference is sqrt(1e-3 * H_idepth).
 constexpr double kTrackingWeightScale = 1e-3;
-//! Relocalisation matches a lost frame against a candidate keyframe's points and those of the keyframes this many
-//! ids before and after it.
-constexpr int kRelocalizationNeighbours = 2;
 //! Floor on a point's inverse-depth variance when turned into a tracking weight (a zero variance = unknown).
 constexpr double kMinIdepthVariance = 1e-12;
 //! DSO makeKeyFrame: window RMSE above which keyframes 2, 3, 4 reveal a failed initialisation.
@@ -49,59 +48,6 @@ constexpr int kMinInitialPoints = 100;
 //! Seed of a keyframe's pixel selection: its frame id plus this fixed offset (any constant: runs stay reproducible).
 constexpr unsigned int kSelectionSeedOffset = 7919u;
 } // namespace
-
-struct LocalMapper::Impl {
-  Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated, const OrbVocabulary *voc)
-      : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),
-        selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect), optimizer(p)
-  {
-    optimizer.setPhotometricallyCalibrated(calibrated);
-    vocabulary = voc;
-    if (vocabulary) {
-      relocalization = std::make_unique<RelocalizationIndex>(*vocabulary);
-    }
-  }
-
-  vpHSlamParameters params;
-  PinholeIntrinsics K0;
-  int width, height;
-  ImmaturePointTracer tracer;
-  PointActivation activation;
-  SharedPointSelector selector;
-  WindowOptimizer optimizer;
-  std::vector<SelectedPixel> selected;     //!< scratch of the pixel selection
-  std::vector<bool> selectedCorner;        //!< per selected pixel: a FAST corner
-  std::vector<cv::Point2f> describePixels; //!< scratch of describe()
-  std::vector<OrbDescriptor> describeOut;
-  std::vector<bool> describeValid;
-  std::vector<float> describeAngles;
-
-  //! Descriptor sharing: ORB descriptors for points [begin, end) of \e points, hosted by \e frame.
-  void describe(const Frame &frame, std::vector<ImmaturePoint> &points, size_t begin)
-  {
-    if (!selector.withDescriptors() || begin >= points.size()) {
-      return;
-    }
-    describePixels.clear();
-    for (size_t i = begin; i < points.size(); ++i) {
-      describePixels.emplace_back(points[i].u, points[i].v);
-    }
-    selector.describe(frame.raw, describePixels, describeOut, describeValid, describeAngles);
-    for (size_t i = begin; i < points.size(); ++i) {
-      const size_t k = i - begin;
-      points[i].hasOrb = describeValid[k];
-      points[i].orb = describeOut[k];
-      points[i].orbAngleDeg = describeAngles[k];
-    }
-  }
-  std::vector<CoarseTrackerPoint> referencePoints;     //!< tracking reference of the newest keyframe
-  std::vector<ReferenceFeature> referenceFeatures;     //!< its points with descriptors (hybrid tracking)
-  std::unique_ptr<RelocalizationIndex> relocalization; //!< null without a vocabulary
-  const OrbVocabulary *vocabulary;
-  int referenceKeyframe = -1;
-  std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
-  int keyframesInSegment = 0;
-};
 
 LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
                          bool photometricCalibration, const OrbVocabulary *vocabulary)
@@ -446,83 +392,6 @@ void LocalMapper::marginalize(int keyframeId)
 }
 
 // ------------------------------------------------------------------------------------------------ outputs
-
-void LocalMapper::keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const
-{
-  const Impl &m = *m_impl;
-  out.id = kf.id();
-  out.wX.clear();
-  out.descriptors.clear();
-  const SE3d wMc = kf.frame->cMw.inverse();
-  for (const MapPoint &p : kf.points) {
-    if (p.status == PointStatus::outlier || !p.hasOrb || !(p.idepth > 0.)) {
-      continue;
-    }
-    const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
-    out.wX.push_back(wMc * (ray / p.idepth));
-    out.descriptors.push_back(p.orb);
-  }
-}
-
-double LocalMapper::descriptorBytesPerKeyframe() const
-{
-  const Impl &m = *m_impl;
-  if (!m.selector.withDescriptors() || m_window.empty()) {
-    return 0.;
-  }
-  // What a descriptor adds to a point: the descriptor, its angle and its flag (padding included by sizeof
-  // differences would overstate it; these are the members added for descriptor sharing).
-  constexpr double kPerPoint = sizeof(OrbDescriptor) + sizeof(float) + sizeof(bool);
-  double points = 0.;
-  for (const KeyframePtr &kf : m_window) {
-    points += static_cast<double>(kf->points.size() + kf->immature.size());
-  }
-  double bytes = kPerPoint * points / static_cast<double>(m_window.size());
-  if (m.relocalization && m.relocalization->size() > 0) {
-    bytes += m.relocalization->memoryBytes() / static_cast<double>(m.relocalization->size());
-  }
-  return bytes;
-}
-
-bool LocalMapper::indexesKeyframes() const
-{
-  return m_impl->relocalization != nullptr;
-}
-
-std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(RelocalizationFrame &frame,
-                                                                          int maxCandidates) const
-{
-  const Impl &m = *m_impl;
-  std::vector<RelocalizationKeyframe> out;
-  if (!m.relocalization) {
-    return out;
-  }
-  BowVector bow;
-  m.relocalization->describeFrame(frame, bow);
-  for (int id : m.relocalization->candidates(bow, maxCandidates)) {
-    // The candidate and its neighbours in time (they see the same place; a keyframe alone hosts few points).
-    RelocalizationKeyframe k;
-    k.id = id;
-    for (int n = id - kRelocalizationNeighbours; n <= id + kRelocalizationNeighbours; ++n) {
-      RelocalizationKeyframe part;
-      auto inWindow =
-          std::find_if(m_window.begin(), m_window.end(), [n](const KeyframePtr &w) { return w->id() == n; });
-      if (inWindow != m_window.end()) {
-        keyframePointsWorld(**inWindow, part);
-      } else if (!m.relocalization->keyframePoints(n, part)) {
-        continue;
-      }
-      k.wX.insert(k.wX.end(), part.wX.begin(), part.wX.end());
-      k.descriptors.insert(k.descriptors.end(), part.descriptors.begin(), part.descriptors.end());
-    }
-    if (k.wX.empty()) {
-      continue;
-    }
-    m.relocalization->index(k);
-    out.push_back(std::move(k));
-  }
-  return out;
-}
 
 bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
                                            double &exposure) const
