@@ -125,7 +125,7 @@ private:
   void dropPointsOutOfView(const Keyframe &newest);
   void makeNewImmaturePoints(Keyframe &kf);
   void marginalize(int keyframeId);
-  //! Points of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
+  //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
   void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 
   struct Impl;
