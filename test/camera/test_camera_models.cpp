@@ -339,6 +339,8 @@ TEST(HSlamCamera, InvalidParametersThrow)
   expectInvalid([] { C(C::fov, 640, 480, 500, 500, 320, 240, {3.2}); }, "omega");
   expectInvalid([] { C(C::fov, 640, 480, 500, 500, 320, 240, {}); }, "FOV");
   expectInvalid([] { C(static_cast<C::Model>(17), 640, 480, 500, 500, 320, 240); }, "unknown camera model");
+  // Positive but too small for ViSP to invert: refused at construction, so getIntrinsics() never throws later.
+  expectInvalid([] { C(C::pinhole, 640, 480, 1e-320, 500, 320, 240); }, "refused by ViSP");
 
   C cam = eurocRadTan();
   expectInvalid([&cam] { cam.setRectification(C::rectifyNone, 640, 480); }, "752x480");

@@ -1,6 +1,8 @@
 // vpHSlamCamera: construction, validation and projection through the internal camera models.
 // The static load* functions live in CameraLoaders.cpp.
 #include <visp3/hslam/vpHSlamCamera.h>
+
+#include <visp3/core/vpException.h>
 #include <visp3/hslam/vpHSlamException.h>
 
 #include "camera/CameraModel.h"
@@ -79,6 +81,14 @@ vpHSlamCamera::vpHSlamCamera(Model model, unsigned int width, unsigned int heigh
     os << name << "principal point must be finite (cx = " << cx << ", cy = " << cy << ")";
     fail(__LINE__, os.str());
   }
+  try {
+    // ViSP inverts the focal lengths: a positive one too small for that (e.g. 1e-320) is refused there. Checked
+    // here so that getIntrinsics() can never throw later.
+    vpCameraParameters K;
+    K.initPersProjWithoutDistortion(fx, fy, cx, cy);
+  } catch (const vpException &e) {
+    fail(__LINE__, name + "intrinsics refused by ViSP (" + e.getStringMessage() + ")");
+  }
   const std::size_t nMin = expectedDistortionMin(model), nMax = expectedDistortionMax(model);
   if (distortion.size() < nMin || distortion.size() > nMax) {
     std::ostringstream os;
@@ -135,7 +145,11 @@ void vpHSlamCamera::setRectification(RectificationMode mode, unsigned int width,
          << ", py = " << py << ", u0 = " << u0 << ", v0 = " << v0 << ")";
       fail(__LINE__, os.str());
     }
-    target.initPersProjWithoutDistortion(px, py, u0, v0);
+    try {
+      target.initPersProjWithoutDistortion(px, py, u0, v0);
+    } catch (const vpException &e) {
+      fail(__LINE__, "explicit rectification intrinsics refused by ViSP (" + e.getStringMessage() + ")");
+    }
   }
   m_rectMode = mode;
   m_rectWidth = w;

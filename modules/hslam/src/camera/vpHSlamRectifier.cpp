@@ -1,6 +1,8 @@
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamRectifier.h>
 
+#include <visp3/core/vpException.h>
+
 #include "camera/CameraModel.h"
 #include "camera/RectifierRemap.h"
 #include "camera/RectifierTarget.h"
@@ -83,7 +85,19 @@ struct vpHSlamRectifier::Impl {
   }
 };
 
-vpHSlamRectifier::vpHSlamRectifier(const vpHSlamCamera &camera) : m_impl(std::make_unique<Impl>(camera)) {}
+vpHSlamRectifier::vpHSlamRectifier(const vpHSlamCamera &camera) : m_impl(std::make_unique<Impl>(camera))
+{
+  try {
+    // The target intrinsics were computed from the calibration; one ViSP cannot invert is refused here, so that
+    // getCameraParameters() never throws later.
+    vpCameraParameters K;
+    K.initPersProjWithoutDistortion(m_impl->target.fx, m_impl->target.fy, m_impl->target.cx, m_impl->target.cy);
+  } catch (const vpException &e) {
+    throw vpHSlamException(vpHSlamException::invalidCalibration,
+                           std::string(__FILE__) + ":" + std::to_string(__LINE__) +
+                               ": rectified intrinsics refused by ViSP (" + e.getStringMessage() + ")");
+  }
+}
 
 vpHSlamRectifier::vpHSlamRectifier(const vpHSlamRectifier &other) : m_impl(std::make_unique<Impl>(*other.m_impl)) {}
 
