@@ -93,12 +93,14 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
 
   KeyframePtr kf0 = std::make_shared<Keyframe>();
   kf0->frame = first;
-  // Gradient pixels only in the first keyframe (descriptors are still computed): DSO's check of the first
-  // windows compares their RMSE with fixed bounds, and corners, being high-contrast, raise it; measured on
-  // 7scenes_redkitchen_000-299 fed every 6th frame, corners there made three correct initialisations in a row
-  // fail the check.
+  // Gradient pixels only in the first keyframe with hybrid tracking (descriptors are still computed): DSO's check
+  // of the first windows compares their RMSE with fixed bounds, and corners, being high-contrast, raise it (measured
+  // on 7scenes_redkitchen_000-299 fed every 6th frame: three correct initialisations in a row failed the check).
+  // Indirect tracking has nothing else to follow, so it gets its corners from the start.
+  const bool cornersFirst = m.params.tracking.mode == vpHSlamParameters::trackingIndirect;
   m.selector.select(first->raw, first->pyramid, m.params.features.desiredPointDensity,
-                    static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected, m.selectedCorner, false);
+                    static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected, m.selectedCorner,
+                    cornersFirst);
   // Each selected pixel is searched along its epipolar segment in the second frame around its prior (the tracer
   // does DSO's discrete search + Gauss-Newton), then refined by the window's point optimiser below.
   const SE3d secondMfirst = init.c2Mc1;
