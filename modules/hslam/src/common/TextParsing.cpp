@@ -136,8 +136,10 @@ void requireNoNulByte(const std::string &text, const std::string &path)
 void requireYamlLineShapes(const std::string &text, const std::string &path)
 {
   int depth = 0;              // open [ and { not closed yet, over lines
+  std::size_t openLine = 0;   // line of the outermost [ or { still open
   std::size_t rootIndent = 0; // indentation of the first key line: no line outside brackets may have less
   std::size_t rootLine = 0;   // its line number, 0 before it
+  std::size_t breakLine = 0;  // first directive or document marker after it, 0 before one
   std::size_t lineNumber = 0, begin = 0;
   while (begin < text.size()) {
     std::size_t end = text.find('\n', begin);
@@ -149,32 +151,54 @@ void requireYamlLineShapes(const std::string &text, const std::string &path)
     begin = end + 1;
     const std::string content = trim(line);
     const bool outside = depth == 0;
-    if (outside &&
-        (content.empty() || content[0] == '#' || content[0] == '%' || content == "---" || content == "...")) {
-      continue; // blank, comment, directive or document marker: no structure
+    if (outside && (content.empty() || content[0] == '#')) {
+      continue; // blank or comment
+    }
+    if (outside && (content[0] == '%' || content == "---" || content == "...")) {
+      breakLine = rootLine != 0 && breakLine == 0 ? lineNumber : breakLine;
+      continue; // directive or document marker: no structure
+    }
+    if (outside && breakLine != 0) {
+      // A second document (or a directive inside the first) sends OpenCV 4.6's YAML reader into an endless loop
+      // when the first one was indented (" d: 0", "---", " - 1"; fuzz_parameters). H-SLAM's files hold one.
+      throwAt(vpHSlamException::parseError, path, breakLine,
+              "a directive or document marker after the first key or item, then more content: one YAML document only");
     }
     if (outside && (startsWith(content, "...") || startsWith(content, "---"))) {
       // A document marker with text after it sends OpenCV 4.6's YAML reader into an endless loop (fuzz_parameters).
       throwAt(vpHSlamException::parseError, path, lineNumber, "'" + content + "': a document marker followed by text");
     }
-    // Brackets and the key colon, outside quotes and comments.
+    // Brackets and the key colon, outside quotes and comments. A [ or { opens a collection only where a value starts
+    // (line start, after "key: ", "- ", or [, { and , inside one): elsewhere it is part of a plain scalar ("T[" is
+    // text for YAML and OpenCV), and counting it would wave through the lines after it (fuzz_camera_yaml hung so).
     char quote = 0;
     bool keyColon = false;
+    bool valueStart = true;
     for (std::size_t i = 0; i < line.size(); ++i) {
       const char c = line[i];
+      const bool blankAfter = i + 1 == line.size() || std::isspace(static_cast<unsigned char>(line[i + 1]));
       if (quote != 0) {
         quote = c == quote ? 0 : quote;
+      } else if (std::isspace(static_cast<unsigned char>(c))) {
+        continue;
       } else if (c == '"' || c == '\'') {
         quote = c;
+        valueStart = false;
       } else if (c == '#' && (i == 0 || std::isspace(static_cast<unsigned char>(line[i - 1])))) {
         break;
-      } else if (c == '[' || c == '{') {
+      } else if ((c == '[' || c == '{') && valueStart) {
+        openLine = depth == 0 ? lineNumber : openLine;
         ++depth;
       } else if ((c == ']' || c == '}') && depth > 0) {
         --depth;
-      } else if (c == ':' && depth == 0 &&
-                 (i + 1 == line.size() || std::isspace(static_cast<unsigned char>(line[i + 1])))) {
-        keyColon = true;
+        valueStart = false;
+      } else if (c == ',' && depth > 0) {
+        valueStart = true;
+      } else if (c == ':' && blankAfter) {
+        keyColon = keyColon || depth == 0;
+        valueStart = true;
+      } else if (!(c == '-' && valueStart && blankAfter)) { // "- " keeps a value starting
+        valueStart = false;
       }
     }
     if (!outside) {
@@ -192,6 +216,9 @@ void requireYamlLineShapes(const std::string &text, const std::string &path)
       throwAt(vpHSlamException::parseError, path, lineNumber,
               "less indented than the first key (line " + std::to_string(rootLine) + ")");
     }
+  }
+  if (depth > 0) {
+    throwAt(vpHSlamException::parseError, path, openLine, "a [ or { opened on this line is never closed");
   }
 }
 

@@ -156,7 +156,7 @@ const Field kFields[] = {
   HSLAM_PARAM(tracking, minMatchesBeforeWidening, atLeast(0), "fewer matches: search again, twice the radius"),
   HSLAM_PARAM(tracking, minGeometricInliers, atLeast(4), "inliers the indirect step needs to give a pose"),
   HSLAM_PARAM(tracking, relocalize, anyValue(), "relocalise in the same map before starting a new segment"),
-  HSLAM_PARAM(tracking, relocalizationTimeout, atLeast(0.), "seconds of failed relocalisation before a new segment"),
+  HSLAM_PARAM(tracking, relocalizationTimeout, atLeast(0.), "seconds seeing features unplaced before a new segment"),
   HSLAM_PARAM(tracking, relocalizationCandidates, atLeast(1), "keyframes tried per lost frame"),
   HSLAM_PARAM(tracking, relocalizationMinInliers, atLeast(6), "PnP inliers needed to accept a relocalisation"),
 

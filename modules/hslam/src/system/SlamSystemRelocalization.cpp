@@ -23,7 +23,10 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
     lost.descriptors.push_back(k.descriptor);
   }
   if (lost.descriptors.empty()) {
-    return false; // nothing to match (covered lens, black frame)
+    // Nothing to match (covered lens, black frame): such frames do not count towards the relocalisation timeout,
+    // which measures how long the camera saw something it could not place.
+    m_lostSince = frame->timestamp;
+    return false;
   }
   std::vector<RelocalizationKeyframe> candidates;
   {

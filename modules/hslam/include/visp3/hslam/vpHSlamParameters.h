@@ -146,7 +146,7 @@ public:
     int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
     int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
     bool relocalize = true;             //!< when tracking fails, relocalise in the same map before a new segment
-    double relocalizationTimeout = 3.;  //!< seconds of failed relocalisation before a new segment starts
+    double relocalizationTimeout = 1.;  //!< seconds of frames with features not relocalised before a new segment
     int relocalizationCandidates = 5;   //!< keyframes tried per lost frame, best BoW score first
     int relocalizationMinInliers = 30;  //!< PnP inliers after refinement to accept a relocalisation
   };
