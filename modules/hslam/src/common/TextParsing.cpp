@@ -139,7 +139,7 @@ void requireYamlLineShapes(const std::string &text, const std::string &path)
   std::size_t openLine = 0;   // line of the outermost [ or { still open
   std::size_t rootIndent = 0; // indentation of the first key line: no line outside brackets may have less
   std::size_t rootLine = 0;   // its line number, 0 before it
-  std::size_t breakLine = 0;  // first directive or document marker after it, 0 before one
+  std::size_t breakLine = 0;  // first document marker after it, 0 before one
   std::size_t lineNumber = 0, begin = 0;
   while (begin < text.size()) {
     std::size_t end = text.find('\n', begin);
@@ -154,15 +154,21 @@ void requireYamlLineShapes(const std::string &text, const std::string &path)
     if (outside && (content.empty() || content[0] == '#')) {
       continue; // blank or comment
     }
-    if (outside && (content[0] == '%' || content == "---" || content == "...")) {
+    // A directive starts at the first column: an indented "%..." line is a key or a scalar (" %: 0" let a second
+    // document through as a directive before the first key, and OpenCV hung on it; fuzz_camera_yaml).
+    if (outside && line[0] == '%' && rootLine != 0) {
+      // Directives come before the document; OpenCV can hang on one after it ("%2 -" after " d: 0"; fuzz_parameters).
+      throwAt(vpHSlamException::parseError, path, lineNumber, "a directive after the first key or item");
+    }
+    if (outside && (line[0] == '%' || content == "---" || content == "...")) {
       breakLine = rootLine != 0 && breakLine == 0 ? lineNumber : breakLine;
       continue; // directive or document marker: no structure
     }
     if (outside && breakLine != 0) {
-      // A second document (or a directive inside the first) sends OpenCV 4.6's YAML reader into an endless loop
-      // when the first one was indented (" d: 0", "---", " - 1"; fuzz_parameters). H-SLAM's files hold one.
+      // A second document sends OpenCV 4.6's YAML reader into an endless loop when the first one was indented
+      // (" d: 0", "---", " - 1"; fuzz_parameters). H-SLAM's files hold one (a marker may end the file).
       throwAt(vpHSlamException::parseError, path, breakLine,
-              "a directive or document marker after the first key or item, then more content: one YAML document only");
+              "a document marker after the first key or item, then more content: one YAML document only");
     }
     if (outside && (startsWith(content, "...") || startsWith(content, "---"))) {
       // A document marker with text after it sends OpenCV 4.6's YAML reader into an endless loop (fuzz_parameters).
