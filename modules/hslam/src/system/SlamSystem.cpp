@@ -398,9 +398,7 @@ bool SlamSystem::estimatePose(const FramePtr &frame, CoarseMotionHistory history
   }
   const bool indirectOnly = m_params.tracking.mode == vpHSlamParameters::trackingIndirect;
   m_hybrid->extract(frame->raw);
-  std::vector<SE3d> hypotheses;
-  CoarseTracker::makeMotionHypotheses(history, hypotheses); // the first is the constant-velocity prediction
-  m_hybrid->indirectStep(m_tracker->referenceFeatures(), hypotheses.front(), m_indirect);
+  m_hybrid->indirectStep(m_tracker->referenceFeatures(), CoarseTracker::predictConstantVelocity(history), m_indirect);
   bool success = false;
   if (m_indirect.usable) {
     m_indirect.term.poseFromGeometryOnly = indirectOnly;

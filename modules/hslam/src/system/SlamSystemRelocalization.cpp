@@ -15,13 +15,7 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
 {
   ++m_relocAttempts;
   m_hybrid->extract(frame->raw);
-  RelocalizationFrame lost;
-  lost.uv.reserve(m_hybrid->keypoints().size());
-  lost.descriptors.reserve(m_hybrid->keypoints().size());
-  for (const FrameKeypoint &k : m_hybrid->keypoints()) {
-    lost.uv.emplace_back(k.u, k.v);
-    lost.descriptors.push_back(k.descriptor);
-  }
+  RelocalizationFrame lost = m_hybrid->relocalizationFrame();
   if (lost.descriptors.empty()) {
     // Nothing to match (covered lens, black frame): such frames do not count towards the relocalisation timeout,
     // which measures how long the camera saw something it could not place.

@@ -199,6 +199,8 @@ public:
     only the identity.
   */
   static void makeMotionHypotheses(const CoarseMotionHistory &history, std::vector<SE3d> &hypotheses);
+  //! The first of those hypotheses: the last motion repeated (identity with an invalid history).
+  static SE3d predictConstantVelocity(const CoarseMotionHistory &history);
 
   //! Points with descriptors of the reference (set by the mapper with setReference(); empty in direct mode).
   void setReferenceFeatures(std::vector<ReferenceFeature> features) { m_features = std::move(features); }

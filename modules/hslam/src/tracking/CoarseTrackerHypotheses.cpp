@@ -73,6 +73,15 @@ const char *coarseTrackingStatusName(CoarseTrackingStatus status)
   return "unknown";
 }
 
+SE3d CoarseTracker::predictConstantVelocity(const CoarseMotionHistory &history)
+{
+  if (!history.valid) {
+    return SE3d();
+  }
+  // The motion between the last two frames, assumed to repeat (DSO: fh_2_slast = slast_2_sprelast).
+  return history.lastMref * history.prelastMref.inverse() * history.lastMref;
+}
+
 void CoarseTracker::makeMotionHypotheses(const CoarseMotionHistory &history, std::vector<SE3d> &hypotheses)
 {
   hypotheses.clear();
@@ -80,9 +89,8 @@ void CoarseTracker::makeMotionHypotheses(const CoarseMotionHistory &history, std
     hypotheses.push_back(SE3d());
     return;
   }
-  // The motion between the last two frames, assumed to repeat (DSO: fh_2_slast = slast_2_sprelast).
   const SE3d lastMprelast = history.lastMref * history.prelastMref.inverse();
-  const SE3d constantVelocity = lastMprelast * history.lastMref;
+  const SE3d constantVelocity = predictConstantVelocity(history);
   hypotheses.push_back(constantVelocity);
   hypotheses.push_back(lastMprelast * lastMprelast * history.lastMref); // a frame was skipped
   hypotheses.push_back(SE3d::exp(kHalfMotion * lastMprelast.log()) * history.lastMref);

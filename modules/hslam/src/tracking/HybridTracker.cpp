@@ -75,6 +75,18 @@ void HybridTracker::project(const std::vector<ReferenceFeature> &features, const
   }
 }
 
+RelocalizationFrame HybridTracker::relocalizationFrame() const
+{
+  RelocalizationFrame frame;
+  frame.uv.reserve(m_keypoints.size());
+  frame.descriptors.reserve(m_keypoints.size());
+  for (const FrameKeypoint &k : m_keypoints) {
+    frame.uv.emplace_back(k.u, k.v);
+    frame.descriptors.push_back(k.descriptor);
+  }
+  return frame;
+}
+
 bool HybridTracker::recoverFromLargeMotion(const std::vector<ReferenceFeature> &features, SE3d &newMref) const
 {
   // The reference's corners against every keypoint (no prediction), then PnP RANSAC and the pose-only refinement:
@@ -86,13 +98,7 @@ bool HybridTracker::recoverFromLargeMotion(const std::vector<ReferenceFeature> &
     reference.wX.push_back(f.Xref);
     reference.descriptors.push_back(f.orb);
   }
-  RelocalizationFrame frame;
-  frame.uv.reserve(m_keypoints.size());
-  frame.descriptors.reserve(m_keypoints.size());
-  for (const FrameKeypoint &k : m_keypoints) {
-    frame.uv.emplace_back(k.u, k.v);
-    frame.descriptors.push_back(k.descriptor);
-  }
+  const RelocalizationFrame frame = relocalizationFrame();
   RelocalizerOptions options;
   options.minMatches = m_params.minMatchesBeforeWidening;
   options.minInliers = m_params.minMatchesBeforeWidening;
@@ -110,7 +116,6 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
   out = IndirectStepResult();
   out.newMref = predictedMref;
   project(features, predictedMref);
-  out.projected = static_cast<int>(m_projected.size());
   if (m_projected.empty() || m_keypoints.empty()) {
     return false;
   }
@@ -119,11 +124,9 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
   options.maxDistance = m_params.matchMaxDistance;
   options.ratio = static_cast<float>(m_params.matchRatio);
   const OrbMatcher matcher(m_keypoints, m_width, m_height, options);
-  out.radiusPx = options.radiusPx;
   std::vector<OrbMatch> matches = matcher.matchProjected(m_projected);
   if (static_cast<int>(matches.size()) < m_params.minMatchesBeforeWidening) {
-    out.radiusPx = kWidenFactor * options.radiusPx;
-    std::vector<OrbMatch> wider = matcher.matchProjected(m_projected, out.radiusPx);
+    std::vector<OrbMatch> wider = matcher.matchProjected(m_projected, kWidenFactor * options.radiusPx);
     if (wider.size() > matches.size()) {
       matches.swap(wider);
     }

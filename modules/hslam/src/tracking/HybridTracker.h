@@ -25,6 +25,7 @@
 #include "features/OrbMatcher.h"
 #include "features/PointDescriptors.h"
 #include "tracking/CoarseTracker.h"
+#include "tracking/Relocalizer.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
@@ -35,11 +36,9 @@ namespace hslam
 {
 //! Outcome of HybridTracker::indirectStep().
 struct IndirectStepResult {
-  bool usable = false; //!< at least Tracking::minGeometricInliers inliers
-  int projected = 0;   //!< reference points landing in the new image
-  int matches = 0;     //!< ORB matches
-  int inliers = 0;     //!< after the pose-only optimisation
-  float radiusPx = 0.f;
+  bool usable = false;    //!< at least Tracking::minGeometricInliers inliers
+  int matches = 0;        //!< ORB matches
+  int inliers = 0;        //!< after the pose-only optimisation
   bool recovered = false; //!< the prediction was abandoned for a pose found without one (large motion)
   SE3d newMref;           //!< pose-only estimate (the prediction when not usable)
   GeometricTerm term;     //!< the inlier matches, for the joint optimisation
@@ -53,6 +52,8 @@ public:
   //! Keypoints and descriptors of a new frame (rectified 8-bit image); replaces the previous ones.
   void extract(const vpImage<unsigned char> &raw);
   const std::vector<FrameKeypoint> &keypoints() const { return m_keypoints; }
+  //! The same keypoints as relocalisation takes them (pixels and descriptors, no direct index yet).
+  RelocalizationFrame relocalizationFrame() const;
 
   /*!
     Match \e features (reference frame) into the frame given to extract(), starting from \e predictedMref, and

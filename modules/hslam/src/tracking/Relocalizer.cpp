@@ -10,11 +10,66 @@
 
 namespace hslam
 {
+namespace
+{
+//! Larger than any Hamming distance of 256-bit descriptors.
+constexpr int kNoDistance = 257;
+
+//! Best and second-best distance of one keyframe point over the keypoints offered, and the best one's index.
+struct BestTwo {
+  int best = kNoDistance, second = kNoDistance, index = -1;
+  void offer(int distance, int keypoint)
+  {
+    if (distance < best) {
+      second = best;
+      best = distance;
+      index = keypoint;
+    } else if (distance < second) {
+      second = distance;
+    }
+  }
+};
+
+//! Each frame keypoint keeps the keyframe point that matched it best (one point per keypoint).
+class KeypointAssignment
+{
+public:
+  explicit KeypointAssignment(std::size_t keypoints) : m_pointOf(keypoints, -1), m_distanceOf(keypoints, kNoDistance) {}
+  //! Point \e point's best keypoint, if it passes the distance and ratio tests and beats the keypoint's current one.
+  void propose(int point, const BestTwo &b, const RelocalizerOptions &options)
+  {
+    if (b.index < 0 || b.best > options.maxDistance ||
+        !(static_cast<float>(b.best) < options.ratio * static_cast<float>(b.second))) {
+      return;
+    }
+    const std::size_t k = static_cast<std::size_t>(b.index);
+    if (b.best < m_distanceOf[k]) {
+      m_pointOf[k] = point;
+      m_distanceOf[k] = b.best;
+    }
+  }
+  //! Pairs (keyframe point, frame keypoint), in keypoint order.
+  std::vector<std::pair<int, int>> matches() const
+  {
+    std::vector<std::pair<int, int>> out;
+    for (std::size_t k = 0; k < m_pointOf.size(); ++k) {
+      if (m_pointOf[k] >= 0) {
+        out.emplace_back(m_pointOf[k], static_cast<int>(k));
+      }
+    }
+    return out;
+  }
+
+private:
+  std::vector<int> m_pointOf, m_distanceOf;
+};
+} // namespace
+
 std::vector<std::pair<int, int>> matchByBow(const RelocalizationKeyframe &keyframe, const RelocalizationFrame &frame,
                                             const RelocalizerOptions &options)
 {
   // Best keyframe point per frame keypoint, found node by node (both direct indices are sorted by node id).
-  std::vector<int> pointOf(frame.descriptors.size(), -1), distanceOf(frame.descriptors.size(), 257);
+  KeypointAssignment assignment(frame.descriptors.size());
   auto kf = keyframe.direct.begin();
   auto fr = frame.direct.begin();
   while (kf != keyframe.direct.end() && fr != frame.direct.end()) {
@@ -30,70 +85,33 @@ std::vector<std::pair<int, int>> matchByBow(const RelocalizationKeyframe &keyfra
       if (p >= keyframe.descriptors.size() || p >= keyframe.wX.size()) {
         continue;
       }
-      int best = 257, second = 257, bestIndex = -1;
+      BestTwo b;
       for (std::uint32_t k : fr->features) {
-        if (k >= frame.descriptors.size()) {
-          continue;
-        }
-        const int d = hammingDistance(keyframe.descriptors[p], frame.descriptors[k]);
-        if (d < best) {
-          second = best;
-          best = d;
-          bestIndex = static_cast<int>(k);
-        } else if (d < second) {
-          second = d;
+        if (k < frame.descriptors.size()) {
+          b.offer(hammingDistance(keyframe.descriptors[p], frame.descriptors[k]), static_cast<int>(k));
         }
       }
-      if (bestIndex >= 0 && best <= options.maxDistance &&
-          static_cast<float>(best) < options.ratio * static_cast<float>(second) &&
-          best < distanceOf[static_cast<std::size_t>(bestIndex)]) {
-        pointOf[static_cast<std::size_t>(bestIndex)] = static_cast<int>(p);
-        distanceOf[static_cast<std::size_t>(bestIndex)] = best;
-      }
+      assignment.propose(static_cast<int>(p), b, options);
     }
     ++kf;
     ++fr;
   }
-  std::vector<std::pair<int, int>> matches;
-  for (std::size_t k = 0; k < pointOf.size(); ++k) {
-    if (pointOf[k] >= 0) {
-      matches.emplace_back(pointOf[k], static_cast<int>(k));
-    }
-  }
-  return matches;
+  return assignment.matches();
 }
 
 std::vector<std::pair<int, int>> matchExhaustive(const RelocalizationKeyframe &keyframe,
                                                  const RelocalizationFrame &frame, const RelocalizerOptions &options)
 {
-  std::vector<int> pointOf(frame.descriptors.size(), -1), distanceOf(frame.descriptors.size(), 257);
+  KeypointAssignment assignment(frame.descriptors.size());
   const std::size_t points = std::min(keyframe.descriptors.size(), keyframe.wX.size());
   for (std::size_t p = 0; p < points; ++p) {
-    int best = 257, second = 257, bestIndex = -1;
+    BestTwo b;
     for (std::size_t k = 0; k < frame.descriptors.size(); ++k) {
-      const int d = hammingDistance(keyframe.descriptors[p], frame.descriptors[k]);
-      if (d < best) {
-        second = best;
-        best = d;
-        bestIndex = static_cast<int>(k);
-      } else if (d < second) {
-        second = d;
-      }
+      b.offer(hammingDistance(keyframe.descriptors[p], frame.descriptors[k]), static_cast<int>(k));
     }
-    if (bestIndex >= 0 && best <= options.maxDistance &&
-        static_cast<float>(best) < options.ratio * static_cast<float>(second) &&
-        best < distanceOf[static_cast<std::size_t>(bestIndex)]) {
-      pointOf[static_cast<std::size_t>(bestIndex)] = static_cast<int>(p);
-      distanceOf[static_cast<std::size_t>(bestIndex)] = best;
-    }
+    assignment.propose(static_cast<int>(p), b, options);
   }
-  std::vector<std::pair<int, int>> matches;
-  for (std::size_t k = 0; k < pointOf.size(); ++k) {
-    if (pointOf[k] >= 0) {
-      matches.emplace_back(pointOf[k], static_cast<int>(k));
-    }
-  }
-  return matches;
+  return assignment.matches();
 }
 
 RelocalizationResult relocalize(const RelocalizationFrame &frame,
