@@ -25,6 +25,7 @@
 #include <visp3/io/vpImageIo.h>
 
 #include "dataset/DatasetArguments.h"
+#include "dataset/DatasetMapOutput.h"
 #include "dataset/DatasetStatistics.h"
 
 #include <csignal>
@@ -101,6 +102,15 @@ bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &
   }
   if (!args.stats.empty()) {
     attempt(args.stats, [&]() { writeStats(args.stats, stats, args, slam.getParameters(), outcome); });
+  }
+  if (!args.mapPly.empty() || !args.mapPng.empty()) {
+    const std::vector<vpHSlam::MapPoint> points = slam.getMapPoints();
+    if (!args.mapPly.empty()) {
+      attempt(args.mapPly, [&]() { writeMapPly(args.mapPly, points, slam.getKeyframes()); });
+    }
+    if (!args.mapPng.empty()) {
+      attempt(args.mapPng, [&]() { writeMapPng(args.mapPng, points, slam.getTrajectory()); });
+    }
   }
   return ok;
 }

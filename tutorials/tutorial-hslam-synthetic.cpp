@@ -1,7 +1,7 @@
 //! \example tutorial-hslam-synthetic.cpp
 //! Render a synthetic sequence of a textured room with exact ground truth, in the TUM RGB-D layout.
 //!
-//!   tutorial-hslam-synthetic --output /tmp/synthetic [--frames 300] [--seed 1] [--width 640 --height 480]
+//!   tutorial-hslam-synthetic --output /tmp/synthetic [--frames 300] [--laps 1] [--seed 1] [--width 640 --height 480]
 //!                            [--vignette] [--response] [--exposure-changes] [--noise 2] [--motion-blur]
 #include <visp3/core/vpTime.h>
 #include <visp3/hslam/vpHSlamException.h>
@@ -16,7 +16,7 @@ namespace
 void usage(const char *program)
 {
   std::cout << "Usage: " << program
-            << " --output DIR [--frames N] [--seed S] [--width W --height H] [--fps F]\n"
+            << " --output DIR [--frames N] [--laps N] [--seed S] [--width W --height H] [--fps F]\n"
                "       [--vignette] [--response] [--exposure-changes] [--noise SIGMA] [--motion-blur] [--help]\n\n"
                "Renders a textured room (photographs from visp-images-data) seen by a hand-held-like camera\n"
                "that loops back to its start, and writes DIR/rgb/NNNNNN.png, rgb.txt, groundtruth.txt (wMc, TUM),\n"
@@ -25,6 +25,7 @@ void usage(const char *program)
                "  --output DIR        folder to write (created)\n"
                "  --frames N          frame count, default 300 (the last frame has the pose of the first)\n"
                "  --seed S            trajectory phases and noise, default 1\n"
+               "  --laps N            drive the loop N times (default 1; N should divide frames - 1)\n"
                "  --width W           image width, default 640\n"
                "  --height H          image height, default 480\n"
                "  --fps F             frame rate, default 30\n"
@@ -57,7 +58,7 @@ bool parseDouble(const std::string &text, double &value)
 int main(int argc, char **argv)
 {
   std::string output;
-  unsigned int frames = 300, seed = 1, width = 640, height = 480;
+  unsigned int frames = 300, seed = 1, width = 640, height = 480, laps = 1;
   double fps = 30.0;
   vpHSlamSyntheticScene::Effects effects;
   for (int k = 1; k < argc; ++k) {
@@ -71,6 +72,8 @@ int main(int argc, char **argv)
       output = argv[++k];
     } else if (arg == "--frames" && hasValue) {
       ok = parseUnsigned(argv[++k], frames);
+    } else if (arg == "--laps" && hasValue) {
+      ok = parseUnsigned(argv[++k], laps) && laps > 0;
     } else if (arg == "--seed" && hasValue) {
       ok = parseUnsigned(argv[++k], seed);
     } else if (arg == "--width" && hasValue) {
@@ -107,6 +110,7 @@ int main(int argc, char **argv)
 
   try {
     vpHSlamSyntheticScene scene;
+    scene.setLaps(laps);
     scene.configure(width, height, frames, fps, seed, effects);
     std::cout << "Synthetic room: " << width << "x" << height << ", " << frames << " frames at " << fps << " Hz, seed "
               << seed << "\nTextures:\n";

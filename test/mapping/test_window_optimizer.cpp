@@ -243,6 +243,63 @@ TEST(WindowOptimizer, NewPointInverseDepthForActivation)
   EXPECT_FALSE(f.accepted);
 }
 
+TEST(WindowOptimizer, ReactivatedPointStaysWithinItsPrior)
+{
+  // Early adoption (issue 9): a point re-activated with its old inverse depth as a prior. Started 20 % off, the
+  // photometric optimum (truth) and a prior 10 % off compete: a weak prior leaves the point at the truth, a strong
+  // one keeps it at the prior, and in between the result lies between the two, within 2 sigma of the prior.
+  Window w;
+  WindowOptimizer opt(w.scene.params);
+  w.addAll(opt);
+  const MapPoint truth = w.kfs[2]->points[40];
+  const double prior = truth.idepth * 1.1;
+  const PointActivationResult free =
+      opt.optimizeNewPoint(2, truth.u, truth.v, truth.idepth * 1.2, truth.patch, truth.patchWeight, 10);
+  const double Hphoto = free.idepthHessian;
+  const PointActivationResult weak = opt.optimizeNewPoint(2, truth.u, truth.v, truth.idepth * 1.2, truth.patch,
+                                                          truth.patchWeight, 10, prior, 1e-6 * Hphoto);
+  const PointActivationResult strong = opt.optimizeNewPoint(2, truth.u, truth.v, truth.idepth * 1.2, truth.patch,
+                                                            truth.patchWeight, 10, prior, 1e6 * Hphoto);
+  const PointActivationResult equal =
+      opt.optimizeNewPoint(2, truth.u, truth.v, truth.idepth * 1.2, truth.patch, truth.patchWeight, 10, prior, Hphoto);
+  std::printf("prior: free %.5f weak %.5f strong %.5f equal %.5f (truth %.5f, prior %.5f)\n", free.idepth, weak.idepth,
+              strong.idepth, equal.idepth, truth.idepth, prior);
+  EXPECT_NEAR(weak.idepth, free.idepth, 1e-3 * truth.idepth);
+  EXPECT_NEAR(strong.idepth, prior, 1e-3 * truth.idepth);
+  EXPECT_GT(equal.idepth, truth.idepth + 0.1 * (prior - truth.idepth));
+  EXPECT_LT(equal.idepth, prior - 0.1 * (prior - truth.idepth));
+  // The Hessian includes the prior; acceptance looks at the photometric part alone.
+  EXPECT_NEAR(equal.idepthHessian, 2. * Hphoto, 0.2 * Hphoto);
+  EXPECT_TRUE(equal.accepted);
+  EXPECT_TRUE(strong.accepted);
+  const double sigmaPrior = std::sqrt(1. / Hphoto);
+  EXPECT_LE(std::fabs(equal.idepth - prior), 2. * sigmaPrior + std::fabs(prior - truth.idepth));
+}
+
+TEST(WindowOptimizer, PairInformationLinksKeyframesSharingResiduals)
+{
+  Window w;
+  WindowOptimizer opt(w.scene.params);
+  w.addAll(opt);
+  opt.optimize(3);
+  const int oldest = w.kfs.front()->id();
+  const std::vector<hslam::PairInformation> pairs = opt.pairInformation(oldest);
+  ASSERT_EQ(pairs.size(), w.kfs.size() - 1u);
+  for (const hslam::PairInformation &p : pairs) {
+    EXPECT_GT(p.residuals, 0);
+    // Symmetric, positive semi-definite, informative in translation and rotation.
+    EXPECT_LT((p.information - p.information.transpose()).norm(), 1e-9 * p.information.norm());
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(p.information);
+    EXPECT_GT(eig.eigenvalues().minCoeff(), -1e-9 * eig.eigenvalues().maxCoeff());
+    EXPECT_GT(eig.eigenvalues().maxCoeff(), 0.);
+    // The relative pose is the window's.
+    const hslam::SE3d expected =
+        w.kfs[static_cast<size_t>(p.otherKeyframeId)]->frame->cMw * w.kfs.front()->frame->cMw.inverse();
+    EXPECT_LT((p.otherMthis.log() - expected.log()).norm(), 1e-9);
+  }
+  EXPECT_TRUE(opt.pairInformation(12345).empty());
+}
+
 TEST(WindowOptimizer, MarginalizationDecision)
 {
   Window w(8, 40);

@@ -99,10 +99,11 @@ void printUsage(const char *program, std::ostream &out)
   out << "Usage: " << program
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--fps HZ]\n"
-         "       [--mode vo-strict] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed X]\n"
+         "       [--mode vo-strict|vo-reuse] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed X]\n"
          "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
          "[--keyframes OUT.txt]\n"
-         "       [--stats OUT.json] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
+         "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--skip-unreadable] [--log-level LEVEL] "
+         "[--quiet] [--no-display]\n"
          "       [--screenshot FILE.png] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
@@ -122,7 +123,8 @@ void printUsage(const char *program, std::ostream &out)
          "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
          "                     and timestamp: a covered lens (default: none)\n"
          "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        vo-strict (window only, DSO-like; the only mode implemented so far)\n"
+         "  --mode NAME        vo-strict (window only, DSO-like; default) or vo-reuse (marginalised points kept\n"
+         "                     as a global map and re-used in the window; slam is not implemented yet)\n"
          "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
          "                     default: tracking.mode of --config, else direct\n"
          "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
@@ -143,7 +145,10 @@ void printUsage(const char *program, std::ostream &out)
          "                     wall_s, cpu_s, hybrid tracking (orb_matches_median, orb_inliers_median,\n"
          "                     geometric_weight_median, relocalizations_attempted, relocalizations_succeeded,\n"
          "                     descriptor_kb_per_keyframe), the run's tracking_mode, stride, blackout (\"A:B\" or\n"
-         "                     \"\") and blacked_out_frames, ...\n"
+         "                     \"\") and blacked_out_frames, global map (marginalized_keyframes, culled_keyframes,\n"
+         "                     global_points, reactivated_points_per_keyframe, window_share_from_global), ...\n"
+         "  --map-ply FILE     the map as a PLY point cloud: active points orange, global map grey, keyframes red\n"
+         "  --map-png FILE     top view of the map points and the trajectory (PNG)\n"
          "  --skip-unreadable  an image that cannot be read or decoded is reported, counted as dropped (in the\n"
          "                     summary and the statistics) and skipped; tracking carries on with the next frame.\n"
          "                     Without it (default), the run stops at that image with an error naming it. The run\n"
@@ -216,6 +221,10 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.keyframes = value();
     } else if (option == "--stats") {
       args.stats = value();
+    } else if (option == "--map-ply") {
+      args.mapPly = value();
+    } else if (option == "--map-png") {
+      args.mapPng = value();
     } else if (option == "--log-level") {
       args.logLevel = value();
     } else if (option == "--quiet") {
@@ -265,10 +274,9 @@ vpHSlamParameters makeParameters(const Arguments &args)
     std::filesystem::remove(file, ignored);
   }
   const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
-  if (mode != vpHSlamParameters::modeVoStrict) {
+  if (mode == vpHSlamParameters::modeSlam) {
     throw vpHSlamException(vpHSlamException::unsupported,
-                           "--mode " + args.mode +
-                               ": not implemented yet; only vo-strict (window-only odometry) is available for now");
+                           "--mode slam: loop closure is not implemented yet; use vo-strict or vo-reuse");
   }
   params.system.mode = mode;
   if (!args.trackingMode.empty()) {

@@ -42,6 +42,8 @@ struct Arguments {
   std::string trajectory;
   std::string keyframes;
   std::string stats;
+  std::string mapPly; //!< --map-ply: the map as a PLY point cloud
+  std::string mapPng; //!< --map-png: top view of map and trajectory
   std::string saveConfig;
   std::string logLevel = "warning";
   bool display = true;

@@ -160,6 +160,15 @@ const Field kFields[] = {
   HSLAM_PARAM(tracking, relocalizationCandidates, atLeast(1), "keyframes tried per lost frame"),
   HSLAM_PARAM(tracking, relocalizationMinInliers, atLeast(6), "PnP inliers needed to accept a relocalisation"),
 
+  HSLAM_PARAM(globalMap, covisibilityMinShared, atLeast(1), "points shared for a co-visibility edge"),
+  HSLAM_PARAM(globalMap, cullObservedShare, between(0., 1.), "culling: share of points seen by enough others"),
+  HSLAM_PARAM(globalMap, cullMinObservers, atLeast(1), "culling: other keyframes that must see a point"),
+  HSLAM_PARAM(globalMap, reuseRadiusPx, positive(), "search radius of a projected global point, px at 640 wide"),
+  HSLAM_PARAM(globalMap, reuseMaxDistance, between(0, 256), "Hamming distance accepted at most for re-use"),
+  HSLAM_PARAM(globalMap, reuseRatio, openInterval(0., 1.), "re-use: best match below this * second best"),
+  HSLAM_PARAM(globalMap, reuseMaxKeyframes, atLeast(1), "stored keyframes searched per new keyframe"),
+  HSLAM_PARAM(globalMap, fusionSigmas, positive(), "late fusion: depths agree within this many sigmas"),
+
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),
   HSLAM_PARAM(system, workerThreads, atLeast(0), "threads for residual accumulation (0 = caller only)"),
@@ -589,8 +598,8 @@ std::string vpHSlamParameters::trackingModeName(TrackingMode mode)
   case trackingHybrid:
     return "hybrid";
   }
-  throw vpHSlamException(vpHSlamException::invalidArgument,
-                         "vpHSlamParameters::trackingModeName: unknown value " + std::to_string(static_cast<int>(mode)));
+  throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamParameters::trackingModeName: unknown value " +
+                                                                std::to_string(static_cast<int>(mode)));
 }
 
 vpHSlamParameters::TrackingMode vpHSlamParameters::parseTrackingMode(const std::string &name)

@@ -7,8 +7,8 @@
 
   One representation for the local and the global map (H-SLAM paper, sec. 3.3): while the point is ACTIVE it
   keeps its 8-pixel patch and is optimised in the window; once MARGINALISED its patch is dropped but host,
-  pixel, inverse depth, variance and descriptor stay, so it can be re-activated later (early adoption / late
-  fusion, next issues).
+  pixel, inverse depth, variance and descriptor stay (map/GlobalMap.h), so it can be re-activated later (early
+  adoption / late fusion, map/GlobalPointReuse.h).
 
   Ownership: the mapper owns points (std::unique_ptr in the keyframe that hosts them); tracking reads copies of
   what it needs (host pixel, inverse depth, patch) through the system's snapshot of the window.
@@ -21,6 +21,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 namespace hslam
 {
@@ -44,7 +45,25 @@ struct MapPoint {
   OrbDescriptor orb;                             //!< 256-bit ORB descriptor at the host pixel (descriptor sharing)
   float orbAngleDeg = 0.f;                       //!< orientation the descriptor was computed at, degrees
   bool hasOrb = false;                           //!< false in direct mode or too close to the border
+  //! Other keyframes in which the point had an inlier photometric residual (ids, sorted, unique): co-visibility.
+  std::vector<int> observers;
+  //! Inverse-depth prior (re-used global point: its old estimate); weight 1 / variance, 0 = no prior.
+  double idepthPrior = 0.;
+  double idepthPriorWeight = 0.;
+  bool fromGlobalMap = false; //!< re-activated or fused from a global point (vo-reuse)
 };
+
+//! Adds \e keyframeId to a sorted list of observer ids (no duplicate).
+inline void addObserver(std::vector<int> &observers, int keyframeId)
+{
+  auto it = observers.begin();
+  while (it != observers.end() && *it < keyframeId) {
+    ++it;
+  }
+  if (it == observers.end() || *it != keyframeId) {
+    observers.insert(it, keyframeId);
+  }
+}
 } // namespace hslam
 
 #endif

@@ -79,6 +79,8 @@ struct PointObservation {
   double idepth = 0.;            //!< host inverse depth
   const float *patch = nullptr;  //!< kPatternSize host intensities
   const float *weight = nullptr; //!< kPatternSize gradient weights
+  double idepthPrior = 0.;       //!< prior on idepth (a re-used global point), see priorWeight
+  double priorWeight = 0.;       //!< 1 / prior variance; 0 = no prior (energy += priorWeight (idepth - prior)^2)
 };
 
 //! Outcome of evaluating one point in one target.

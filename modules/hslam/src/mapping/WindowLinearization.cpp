@@ -102,6 +102,13 @@ void linearizeRange(const WindowContext &ctx, std::vector<WindowPoint> &points, 
       Hpp += H(kFrameDims, kFrameDims);
       bp += b[kFrameDims];
     }
+    if (p.obs.priorWeight > 0.) {
+      // Inverse-depth prior of a re-used global point (its old estimate): one more residual on rho only.
+      const double d = p.obs.idepth - p.obs.idepthPrior;
+      acc.energy += p.obs.priorWeight * d * d;
+      Hpp += p.obs.priorWeight;
+      bp += p.obs.priorWeight * d;
+    }
     p.Hpp = Hpp;
     p.bp = bp;
     p.inlierResiduals = inliers;
@@ -156,6 +163,10 @@ double energyRange(const WindowContext &ctx, const std::vector<WindowPoint> &poi
         ++good;
       }
       sum += e;
+    }
+    if (p.obs.priorWeight > 0.) {
+      const double d = p.obs.idepth - p.obs.idepthPrior;
+      sum += p.obs.priorWeight * d * d;
     }
   }
   if (inliers) {

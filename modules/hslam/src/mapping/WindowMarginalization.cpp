@@ -52,6 +52,58 @@ void WindowOptimizer::remapAfterFrameRemoval(int removed)
   }
 }
 
+std::vector<PairInformation> WindowOptimizer::pairInformation(int keyframeId)
+{
+  std::vector<PairInformation> out;
+  int idx = -1;
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    if (m_frames[i].kf->id() == keyframeId) {
+      idx = static_cast<int>(i);
+    }
+  }
+  if (idx < 0) {
+    return out;
+  }
+  syncStatesAndPoints();
+  prepareContext();
+  const int n = static_cast<int>(m_frames.size());
+  WindowAccumulator acc;
+  acc.reset(n);
+  linearizeRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), acc);
+  std::vector<int> count(static_cast<size_t>(n), 0);
+  for (const WindowPoint &p : m_points) {
+    for (const WindowResidual &r : p.residuals) {
+      if (r.state != ResidualState::inlier) {
+        continue;
+      }
+      if (p.host == idx) {
+        ++count[static_cast<size_t>(r.target)];
+      } else if (r.target == idx) {
+        ++count[static_cast<size_t>(p.host)];
+      }
+    }
+  }
+  const SE3d &thisMw = m_states[static_cast<size_t>(idx)].cMw;
+  for (int j = 0; j < n; ++j) {
+    if (j == idx || count[static_cast<size_t>(j)] == 0) {
+      continue;
+    }
+    PairInformation info;
+    info.otherKeyframeId = m_frames[static_cast<size_t>(j)].kf->id();
+    info.otherMthis = m_states[static_cast<size_t>(j)].cMw * thisMw.inverse();
+    info.residuals = count[static_cast<size_t>(j)];
+    // Residuals hosted here: relative pose otherMthis itself. Hosted in the other: thisMother = otherMthis^-1,
+    // whose left perturbation is -Ad(otherMthis^-1) times that of otherMthis.
+    const Mat8d &Hforward = acc.pairH[static_cast<size_t>(idx * kMaxWindowKeyframes + j)];
+    const Mat8d &Hbackward = acc.pairH[static_cast<size_t>(j * kMaxWindowKeyframes + idx)];
+    const Eigen::Matrix<double, 6, 6> Ad = info.otherMthis.inverse().adjoint();
+    info.information = Hforward.topLeftCorner<6, 6>() + Ad.transpose() * Hbackward.topLeftCorner<6, 6>() * Ad;
+    info.information = 0.5 * (info.information + info.information.transpose());
+    out.push_back(info);
+  }
+  return out;
+}
+
 void WindowOptimizer::marginalizeKeyframe(int keyframeId)
 {
   int idx = -1;
@@ -245,8 +297,8 @@ void WindowOptimizer::evaluateCandidate(int host, const PointObservation &obs, d
 
 PointActivationResult WindowOptimizer::optimizeNewPoint(int hostKeyframeId, double u, double v, double idepth,
                                                         const std::array<float, kPatternSize> &patch,
-                                                        const std::array<float, kPatternSize> &weight,
-                                                        int iterations) const
+                                                        const std::array<float, kPatternSize> &weight, int iterations,
+                                                        double priorIdepth, double priorWeight) const
 {
   int host = -1;
   for (size_t i = 0; i < m_frames.size(); ++i) {
@@ -265,22 +317,34 @@ PointActivationResult WindowOptimizer::optimizeNewPoint(int hostKeyframeId, doub
   obs.idepth = idepth;
   obs.patch = patch.data();
   obs.weight = weight.data();
-  double energy, H, b;
+  // Photometric terms from evaluateCandidate, plus the prior of a re-used point (Hp = photometric Hessian alone).
+  auto evaluate = [&](const PointObservation &o, double &e, double &H, double &b, double &Hp, int &in) {
+    evaluateCandidate(host, o, e, H, b, in);
+    Hp = H;
+    if (priorWeight > 0.) {
+      const double d = o.idepth - priorIdepth;
+      e += priorWeight * d * d;
+      H += priorWeight;
+      b += priorWeight * d;
+    }
+  };
+  double energy, H, b, Hphoto;
   int inliers;
-  evaluateCandidate(host, obs, energy, H, b, inliers);
+  evaluate(obs, energy, H, b, Hphoto, inliers);
   double lambda = kPointInitialLambda;
   for (int it = 0; it < iterations && H > 0.; ++it) {
     const double step = -b / (H * (1. + lambda));
     PointObservation trial = obs;
     trial.idepth += step;
-    double e2, H2, b2;
+    double e2, H2, b2, Hp2;
     int in2;
-    evaluateCandidate(host, trial, e2, H2, b2, in2);
+    evaluate(trial, e2, H2, b2, Hp2, in2);
     if (e2 < energy) {
       obs = trial;
       energy = e2;
       H = H2;
       b = b2;
+      Hphoto = Hp2;
       inliers = in2;
       lambda *= kPointLambdaAccept;
     } else {
@@ -296,7 +360,7 @@ PointActivationResult WindowOptimizer::optimizeNewPoint(int hostKeyframeId, doub
   result.inlierResiduals = inliers;
   result.energy = energy;
   result.accepted = std::isfinite(energy) && obs.idepth > 0. && inliers >= kMinInlierResidualsActivate &&
-                    H >= m_mapper.minIdepthHessianActivate;
+                    Hphoto >= m_mapper.minIdepthHessianActivate;
   return result;
 }
 

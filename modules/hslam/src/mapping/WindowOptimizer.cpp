@@ -159,6 +159,8 @@ void WindowOptimizer::syncStatesAndPoints()
     p.obs.idepth = mp.idepth;
     p.obs.patch = mp.patch.data();
     p.obs.weight = mp.patchWeight.data();
+    p.obs.idepthPrior = mp.idepthPrior;
+    p.obs.priorWeight = mp.idepthPriorWeight;
   }
   m_allPoints.resize(m_points.size());
   for (size_t i = 0; i < m_points.size(); ++i) {
@@ -616,6 +618,12 @@ void WindowOptimizer::writeBack()
     mp.idepth = p.obs.idepth;
     // DSO's variance proxy: the inverse of the point's own (undamped) Hessian block.
     mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
+    // Co-visibility: every keyframe in which the point had an inlier residual observes it.
+    for (const WindowResidual &r : p.residuals) {
+      if (r.state == ResidualState::inlier) {
+        addObserver(mp.observers, m_frames[static_cast<size_t>(r.target)].kf->id());
+      }
+    }
   }
 }
 } // namespace hslam

@@ -83,6 +83,20 @@ struct PointActivationResult {
   double energy = 0.; //!< clamped robust energy at the result
 };
 
+/*!
+  Pose-pose link between two window keyframes from the photometric residuals they share (both directions), for the
+  hybrid connectivity graph: the relative pose and its information (6x6, left perturbation of otherMthis, twist
+  order translation, rotation) = the pose block of the residuals' J^T W J at the current state. Inverse depths are
+  held fixed in it (not Schur-complemented), so it is optimistic; the pose graph weighs edges relative to each
+  other, which this keeps.
+*/
+struct PairInformation {
+  int otherKeyframeId = -1;
+  SE3d otherMthis;                         //!< relative pose at marginalisation
+  Eigen::Matrix<double, 6, 6> information; //!< see above
+  int residuals = 0;                       //!< inlier residuals between the two (both directions)
+};
+
 class VISP_EXPORT WindowOptimizer
 {
 public:
@@ -130,12 +144,21 @@ public:
   std::vector<int> keyframesToMarginalize() const;
 
   /*!
+    For the connectivity graph, before marginalizeKeyframe(): the pose-pose information of window keyframe
+    \e keyframeId with every other window keyframe it shares inlier residuals with (linearises all points once).
+  */
+  std::vector<PairInformation> pairInformation(int keyframeId);
+
+  /*!
     Optimise the inverse depth of a candidate point hosted in window keyframe \e hostKeyframeId against all other
-    window keyframes, poses fixed (DSO optimizeImmaturePoint). Does not add the point.
+    window keyframes, poses fixed (DSO optimizeImmaturePoint). Does not add the point. With \e priorWeight > 0
+    (a re-activated global point) the energy gets priorWeight (idepth - priorIdepth)^2 and the returned Hessian
+    includes priorWeight; acceptance still asks the photometric Hessian alone for mapper.minIdepthHessianActivate.
   */
   PointActivationResult optimizeNewPoint(int hostKeyframeId, double u, double v, double idepth,
                                          const std::array<float, kPatternSize> &patch,
-                                         const std::array<float, kPatternSize> &weight, int iterations) const;
+                                         const std::array<float, kPatternSize> &weight, int iterations,
+                                         double priorIdepth = 0., double priorWeight = 0.) const;
 
   //! Inverse-depth Hessian of such a candidate at \e idepth (compare with mapper.minIdepthHessianActivate).
   double idepthHessian(int hostKeyframeId, double u, double v, double idepth,

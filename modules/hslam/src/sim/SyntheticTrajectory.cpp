@@ -61,8 +61,8 @@ void mul3(const double A[9], const double B[9], double C[9])
 } // namespace
 
 SyntheticTrajectory::SyntheticTrajectory(unsigned int frameCount, unsigned int seed, double maxStepMetres,
-                                         double maxStepRadians)
-    : m_period(frameCount > 1 ? frameCount - 1 : 1)
+                                         double maxStepRadians, unsigned int laps)
+    : m_period(static_cast<double>(frameCount > 1 ? frameCount - 1 : 1) / std::max(1u, laps))
 {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> phase(0.0, kTwoPi);
@@ -104,7 +104,7 @@ SyntheticTrajectory::SyntheticTrajectory(unsigned int frameCount, unsigned int s
 SimPose SyntheticTrajectory::pose(double frame) const
 {
   // fmod keeps integer frames exact: frame == period gives phase 0, the very same numbers as frame 0.
-  const double theta = kTwoPi * (std::fmod(frame, static_cast<double>(m_period)) / m_period);
+  const double theta = kTwoPi * (std::fmod(frame, m_period) / m_period);
   SimPose P;
   double ang[3];
   for (int a = 0; a < 3; ++a) {

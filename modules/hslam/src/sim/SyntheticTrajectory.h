@@ -31,11 +31,14 @@ public:
   static constexpr int kHarmonics = 3;
 
   /*!
-    \param frameCount : frames of the sequence (>= 2); the loop period is frameCount - 1 frames.
+    \param frameCount : frames of the sequence (>= 2).
     \param seed : selects the phases.
     \param maxStepMetres, maxStepRadians : bounds on the motion between consecutive frames.
+    \param laps : times the loop is driven (>= 1); the period is (frameCount - 1) / laps frames, so with laps
+    dividing frameCount - 1 every lap starts exactly at the pose of frame 0.
   */
-  SyntheticTrajectory(unsigned int frameCount, unsigned int seed, double maxStepMetres, double maxStepRadians);
+  SyntheticTrajectory(unsigned int frameCount, unsigned int seed, double maxStepMetres, double maxStepRadians,
+                      unsigned int laps = 1);
 
   //! Pose at a (possibly fractional) frame index; integer indices are exactly periodic.
   SimPose pose(double frame) const;
@@ -47,7 +50,7 @@ public:
   double stepBoundRadians() const { return m_stepBoundRadians; }
 
 private:
-  unsigned int m_period; //!< loop period in frames (frameCount - 1)
+  double m_period; //!< loop period in frames ((frameCount - 1) / laps)
   double m_posAmp[3][kHarmonics], m_posPhase[3][kHarmonics];
   double m_angAmp[3][kHarmonics], m_angPhase[3][kHarmonics];
   double m_stepBoundMetres, m_stepBoundRadians;

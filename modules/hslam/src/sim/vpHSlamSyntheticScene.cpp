@@ -60,6 +60,14 @@ vpHSlamSyntheticScene::vpHSlamSyntheticScene()
 
 vpHSlamSyntheticScene::~vpHSlamSyntheticScene() = default;
 
+void vpHSlamSyntheticScene::setLaps(unsigned int laps)
+{
+  if (laps == 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "synthetic scene: laps must be at least 1");
+  }
+  m_laps = laps;
+}
+
 void vpHSlamSyntheticScene::configure(unsigned int width, unsigned int height, unsigned int frames, double fps,
                                       unsigned int seed, const Effects &effects)
 {
@@ -99,7 +107,7 @@ void vpHSlamSyntheticScene::configure(unsigned int width, unsigned int height, u
   m_fps = fps;
   m_seed = seed;
   m_effects = effects;
-  m_trajectory.reset(new hslam::SyntheticTrajectory(frames, seed, kMaxStepMetres, kMaxStepRadians));
+  m_trajectory.reset(new hslam::SyntheticTrajectory(frames, seed, kMaxStepMetres, kMaxStepRadians, m_laps));
 
   m_vignette.clear();
   if (effects.vignette) {

@@ -47,12 +47,21 @@ constexpr double kInitialMinRelativeSigma = 0.1;
 constexpr int kMinInitialPoints = 100;
 //! Seed of a keyframe's pixel selection: its frame id plus this fixed offset (any constant: runs stay reproducible).
 constexpr unsigned int kSelectionSeedOffset = 7919u;
+
+GlobalMap::Options globalMapOptions(const vpHSlamParameters::GlobalMap &g)
+{
+  GlobalMap::Options o;
+  o.covisibilityMinShared = g.covisibilityMinShared;
+  o.cullObservedShare = g.cullObservedShare;
+  o.cullMinObservers = g.cullMinObservers;
+  return o;
+}
 } // namespace
 
 LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
                          bool photometricCalibration, const OrbVocabulary *vocabulary)
     : m_impl(new Impl(params, K0, width, height, photometricCalibration, vocabulary)),
-      m_photometricCalibration(photometricCalibration)
+      m_photometricCalibration(photometricCalibration), m_globalMap(globalMapOptions(params.globalMap))
 {
 }
 
@@ -66,6 +75,7 @@ void LocalMapper::clear()
   m_impl.swap(fresh);
   m_window.clear();
   m_initializationFailed = false;
+  ++m_segment; // the global map keeps what the old segment stored; re-use stays within a segment
 }
 
 // ------------------------------------------------------------------------------------------------ initialisation
@@ -269,6 +279,9 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf)
   buildReferencePoints();
   dropPointsOutOfView(*kf);
   makeNewImmaturePoints(*kf);
+  if (keepsGlobalMap() && reuseGlobalPoints(*kf) > 0) {
+    buildReferencePoints(); // re-activated points are active in the newest keyframe: tracking uses them at once
+  }
   const double t2 = threadCpuMs();
   for (int id : toMarginalize) {
     marginalize(id);
@@ -378,6 +391,10 @@ void LocalMapper::marginalize(int keyframeId)
   if (it == m_window.end()) {
     return;
   }
+  std::vector<PairInformation> pairs;
+  if (keepsGlobalMap()) {
+    pairs = m.optimizer.pairInformation(keyframeId);
+  }
   m.optimizer.marginalizeKeyframe(keyframeId);
   if (m.relocalization) {
     RelocalizationKeyframe points;
@@ -390,6 +407,9 @@ void LocalMapper::marginalize(int keyframeId)
   state.inWindow = false;
   state.activePoints = 0;
   m.marginalizedStates.push_back(state);
+  if (keepsGlobalMap()) {
+    storeInGlobalMap(**it, pairs); // after setKeyframePoints: a culled keyframe then leaves the index whole
+  }
   m_window.erase(it);
 }
 
@@ -485,6 +505,12 @@ double LocalMapper::memoryBytes() const
     bytes +=
         static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
   }
+  return bytes + marginalizedMemoryBytes();
+}
+
+double LocalMapper::marginalizedMemoryBytes() const
+{
+  double bytes = m_globalMap.memoryBytes();
   if (m_impl->relocalization) {
     bytes += m_impl->relocalization->memoryBytes();
   }

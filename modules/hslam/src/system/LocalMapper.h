@@ -25,6 +25,7 @@
 
 #include "features/ImagePyramid.h"
 #include "map/Frame.h"
+#include "map/GlobalMap.h"
 #include "map/Keyframe.h"
 #include "math/SE3.h"
 
@@ -41,6 +42,7 @@ class OrbVocabulary;
 struct TwoViewInitialization;
 struct RelocalizationKeyframe;
 struct RelocalizationFrame;
+struct PairInformation;
 
 class VISP_EXPORT LocalMapper
 {
@@ -89,9 +91,12 @@ public:
 
   int activePointCount() const;
   int immaturePointCount() const;
-  //! Bytes held by the window's keyframes (pyramids, images, points).
+  //! Bytes held by the window's keyframes (pyramids, images, points) plus marginalizedMemoryBytes().
   double memoryBytes() const;
-  int keyframesHeld() const { return static_cast<int>(m_window.size()); }
+  //! Bytes held for keyframes that left the window: global map (points, graph) and relocalisation index.
+  double marginalizedMemoryBytes() const;
+  //! Keyframes whose data is held: the window's and those stored in the global map.
+  int keyframesHeld() const { return static_cast<int>(m_window.size() + m_globalMap.keyframes().size()); }
   //! Pose of the newest keyframe (world-to-camera); identity when none.
   SE3d newestKeyframe_cMw() const;
   int newestKeyframeId() const;
@@ -102,8 +107,27 @@ public:
   */
   bool initializationFailed() const { return m_initializationFailed; }
 
-  //! Drop the window (a new segment starts).
+  //! Drop the window (a new segment starts; the global map keeps the old segment's keyframes).
   void clear();
+
+  // ---- global map (system.mode vo-reuse and slam)
+  //! Counters of global-map re-use since the start.
+  struct ReuseStatistics {
+    int keyframes = 0;        //!< keyframes made while re-use was on
+    int reactivated = 0;      //!< global points re-activated by early adoption
+    int fused = 0;            //!< global points absorbed by late fusion
+    int windowActive = 0;     //!< active points in the window now
+    int windowFromGlobal = 0; //!< of which came from the global map
+    int storedKeyframes = 0;  //!< keyframes in the global map
+    int culledKeyframes = 0;  //!< of which culled (pose node only)
+    size_t storedPoints = 0;  //!< points held by the global map (any state)
+  };
+  ReuseStatistics reuseStatistics() const;
+  //! True when marginalised keyframes are kept (system.mode is not vo-strict).
+  bool keepsGlobalMap() const;
+  const GlobalMap &globalMap() const { return m_globalMap; }
+  //! Map points in world coordinates with their status: active window points and global ones (stored state).
+  void mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const;
 
   // ---- relocalisation (only with a vocabulary)
   //! Memory the descriptors add to a keyframe (point descriptors, BoW vector, stored points), bytes; 0 without.
@@ -125,6 +149,10 @@ private:
   void dropPointsOutOfView(const Keyframe &newest);
   void makeNewImmaturePoints(Keyframe &kf);
   void marginalize(int keyframeId);
+  //! Copy a marginalised keyframe into the global map with its pose-pose links (before the optimiser drops it).
+  void storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs);
+  //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
+  int reuseGlobalPoints(Keyframe &newest);
   //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
   void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 
@@ -133,6 +161,9 @@ private:
   std::vector<KeyframePtr> m_window; //!< oldest first
   bool m_photometricCalibration;
   bool m_initializationFailed = false;
+  GlobalMap m_globalMap; //!< outlives segments (clear() keeps it)
+  int m_segment = 0;     //!< segment of the keyframes being made
+  ReuseStatistics m_reuse;
 };
 } // namespace hslam
 

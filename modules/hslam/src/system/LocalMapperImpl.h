@@ -24,7 +24,9 @@ namespace hslam
 struct LocalMapper::Impl {
   Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated, const OrbVocabulary *voc)
       : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),
-        selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect), optimizer(p)
+        selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect ||
+                                 p.system.mode != vpHSlamParameters::modeVoStrict),
+        optimizer(p)
   {
     optimizer.setPhotometricallyCalibrated(calibrated);
     vocabulary = voc;

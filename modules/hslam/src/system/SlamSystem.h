@@ -36,6 +36,7 @@
 #include "map/Frame.h"
 #include "math/SE3.h"
 #include "system/FramePreprocessor.h"
+#include "system/LocalMapper.h"
 #include "system/RunStatistics.h"
 #include "system/TrajectoryRecorder.h"
 #include "tracking/CoarseTracker.h"
@@ -55,7 +56,7 @@
 
 namespace hslam
 {
-class LocalMapper;
+// LocalMapper: included for LocalMapper::ReuseStatistics in the snapshot.
 class TwoViewInitializer;
 
 class VISP_EXPORT SlamSystem
@@ -75,6 +76,8 @@ public:
   std::vector<vpHSlam::Keyframe> keyframes() const;
   std::vector<vpColVector> activePoints(std::vector<double> *depths) const;
   std::vector<vpImagePoint> descriptorMatches() const;
+  std::vector<vpHSlam::MapPoint> mapPoints() const;
+  std::vector<vpHSlam::GraphEdge> graphEdges() const;
   vpHSlamTrajectory trajectory(int segment) const { return m_recorder.trajectory(segment); }
   vpHSlamTrajectory keyframeTrajectory(int segment) const { return m_recorder.keyframeTrajectory(segment); }
   std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
@@ -174,7 +177,7 @@ private:
 
   // ---- back end
   std::unique_ptr<LocalMapper> m_mapper;
-  std::mutex m_mapperMutex;
+  mutable std::mutex m_mapperMutex;
   std::unique_ptr<CoarseTracker> m_preparedTracker; //!< filled by the back end, swapped by the tracking thread
   int m_preparedRefKeyframe = -1;
   AffineBrightness m_preparedRefAffine;
@@ -204,6 +207,8 @@ private:
   double m_snapshotMemoryMb = 0.;
   unsigned int m_snapshotKeyframesHeld = 0;
   double m_snapshotDescriptorKb = 0.;
+  double m_snapshotMarginalizedMb = 0.;         //!< memory held for keyframes that left the window
+  LocalMapper::ReuseStatistics m_snapshotReuse; //!< global map counters
 };
 } // namespace hslam
 

@@ -167,6 +167,8 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotMemoryMb = m_mapper->memoryBytes() / kBytesPerMegabyte;
   m_snapshotKeyframesHeld = static_cast<unsigned int>(m_mapper->keyframesHeld());
   m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
+  m_snapshotMarginalizedMb = m_mapper->marginalizedMemoryBytes() / kBytesPerMegabyte;
+  m_snapshotReuse = m_mapper->reuseStatistics();
 }
 
 void SlamSystem::synchronize()

@@ -95,7 +95,21 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.immaturePoints = m_snapshotImmature;
   s.mapMemoryMb = m_snapshotMemoryMb;
   s.keyframesHeld = m_snapshotKeyframesHeld;
-  s.mapMemoryMbPerKeyframe = m_snapshotKeyframesHeld > 0 ? m_snapshotMemoryMb / m_snapshotKeyframesHeld : 0.;
+  const LocalMapper::ReuseStatistics &r = m_snapshotReuse;
+  s.marginalizedMemoryMb = m_snapshotMarginalizedMb;
+  s.marginalizedKeyframes = static_cast<unsigned int>(r.storedKeyframes);
+  // Per keyframe: what one more keyframe costs once it has left the window (the window's own keyframes are a
+  // fixed cost); with nothing stored (vo-strict), the window's memory per keyframe.
+  if (r.storedKeyframes > 0) {
+    s.mapMemoryMbPerKeyframe = m_snapshotMarginalizedMb / r.storedKeyframes;
+  } else {
+    s.mapMemoryMbPerKeyframe = m_snapshotKeyframesHeld > 0 ? m_snapshotMemoryMb / m_snapshotKeyframesHeld : 0.;
+  }
+  s.culledKeyframes = static_cast<unsigned int>(r.culledKeyframes);
+  s.globalPoints = static_cast<unsigned int>(r.storedPoints);
+  s.reactivatedPointsPerKeyframe = r.keyframes > 0 ? static_cast<double>(r.reactivated) / r.keyframes : 0.;
+  s.fusedPointsPerKeyframe = r.keyframes > 0 ? static_cast<double>(r.fused) / r.keyframes : 0.;
+  s.windowShareFromGlobal = r.windowActive > 0 ? static_cast<double>(r.windowFromGlobal) / r.windowActive : 0.;
   s.orbMatchesMedian = t.orbMatchesMedian;
   s.orbInliersMedian = t.orbInliersMedian;
   s.geometricWeightMedian = t.geometricWeightMedian;
@@ -109,6 +123,52 @@ std::vector<vpImagePoint> SlamSystem::descriptorMatches() const
 {
   std::lock_guard<std::mutex> lock(m_imageMutex);
   return m_lastMatches;
+}
+
+std::vector<vpHSlam::MapPoint> SlamSystem::mapPoints() const
+{
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> status;
+  {
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    if (m_mapper) {
+      m_mapper->mapPointsWorld(points, status);
+    }
+  }
+  std::vector<vpHSlam::MapPoint> out(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    out[i].wX.resize(3);
+    for (unsigned int k = 0; k < 3; ++k) {
+      out[i].wX[k] = points[i][static_cast<int>(k)];
+    }
+    out[i].active = status[i] == 0;
+  }
+  return out;
+}
+
+std::vector<vpHSlam::GraphEdge> SlamSystem::graphEdges() const
+{
+  std::vector<vpHSlam::GraphEdge> out;
+  std::lock_guard<std::mutex> lock(m_mapperMutex);
+  if (!m_mapper) {
+    return out;
+  }
+  const GlobalMap &map = m_mapper->globalMap();
+  for (const CovisibilityEdge &e : map.covisibilityEdges()) {
+    vpHSlam::GraphEdge g;
+    g.a = static_cast<unsigned int>(e.a);
+    g.b = static_cast<unsigned int>(e.b);
+    g.covisibility = true;
+    g.weight = static_cast<unsigned int>(e.weight);
+    out.push_back(g);
+  }
+  for (const PosePoseEdge &e : map.posePoseEdges()) {
+    vpHSlam::GraphEdge g;
+    g.a = static_cast<unsigned int>(e.from);
+    g.b = static_cast<unsigned int>(e.to);
+    out.push_back(g);
+  }
+  return out;
 }
 
 void SlamSystem::rectifiedImage(vpImage<unsigned char> &I) const

@@ -57,6 +57,16 @@ std::vector<vpImagePoint> vpHSlam::getDescriptorMatches() const
   return m_system->descriptorMatches();
 }
 
+std::vector<vpHSlam::MapPoint> vpHSlam::getMapPoints() const
+{
+  return m_system->mapPoints();
+}
+
+std::vector<vpHSlam::GraphEdge> vpHSlam::getGraphEdges() const
+{
+  return m_system->graphEdges();
+}
+
 vpHSlamTrajectory vpHSlam::getTrajectory(int segment) const
 {
   return m_system->trajectory(segment);

@@ -75,6 +75,13 @@ std::vector<int> RelocalizationIndex::candidates(const BowVector &bow, int maxCa
   return ids;
 }
 
+void RelocalizationIndex::removeKeyframe(int id)
+{
+  m_database.remove(id);
+  m_points.erase(id);
+  m_bowSizes.erase(id);
+}
+
 void RelocalizationIndex::clear()
 {
   m_database.clear();

@@ -51,6 +51,8 @@ public:
   //! Keyframe ids best first, at most \e maxCandidates.
   std::vector<int> candidates(const BowVector &bow, int maxCandidates) const;
 
+  //! A culled keyframe leaves the database (no candidate any more) with its stored points.
+  void removeKeyframe(int id);
   void clear();
   std::size_t size() const { return m_database.size(); }
   //! Bytes held (BoW vectors, stored points), an estimate for the memory statistics.

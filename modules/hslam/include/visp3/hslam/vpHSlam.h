@@ -124,7 +124,7 @@ public:
     double mappingMsPerKeyframeP95 = 0.;    //!< 95th percentile of the same, milliseconds
     double mappingMsPerFrameMedian = 0.;    //!< non-keyframes (epipolar tracing only), milliseconds
     double mapMemoryMb = 0.;                //!< estimated memory held by keyframes (images, points), MB
-    double mapMemoryMbPerKeyframe = 0.;     //!< mapMemoryMb divided by the keyframes held, MB
+    double mapMemoryMbPerKeyframe = 0.;     //!< marginalizedMemoryMb per marginalised keyframe (window's if none)
     unsigned int keyframesHeld = 0;         //!< keyframes whose data is held (window + kept marginalised ones)
     double orbMatchesMedian = 0.;           //!< hybrid/indirect tracking: ORB matches per tracked frame, median
     double orbInliersMedian = 0.;           //!< the same, geometric inliers of the pose-only step, median
@@ -132,6 +132,13 @@ public:
     unsigned int relocalizationsAttempted = 0; //!< lost frames for which relocalisation was tried
     unsigned int relocalizationsSucceeded = 0; //!< relocalisations after which tracking resumed in the same map
     double descriptorKbPerKeyframe = 0.;       //!< memory the descriptors add to a keyframe (points + BoW), KB
+    double marginalizedMemoryMb = 0.;          //!< held for keyframes that left the window (global map, index), MB
+    unsigned int marginalizedKeyframes = 0;    //!< keyframes kept in the global map (vo-reuse, slam)
+    unsigned int culledKeyframes = 0;          //!< of which culled: pose node only, out of co-visibility and database
+    unsigned int globalPoints = 0;             //!< points stored in the global map
+    double reactivatedPointsPerKeyframe = 0.;  //!< global points re-activated by early adoption, per keyframe
+    double fusedPointsPerKeyframe = 0.;        //!< global points absorbed by late fusion, per keyframe
+    double windowShareFromGlobal = 0.;         //!< share of the window's active points that came from the global map
   };
 
   /*!
@@ -185,6 +192,27 @@ public:
     or when the frame was not tracked).
   */
   std::vector<vpImagePoint> getDescriptorMatches() const;
+
+  //! A map point as seen from outside (a copy).
+  struct MapPoint {
+    vpColVector wX;      //!< world position (3), metres up to the monocular scale
+    bool active = false; //!< in the optimisation window (else: marginalised, in the global map)
+  };
+  /*!
+    Every map point: the window's (active, and those that left the window with their host still in it) and, in
+    vo-reuse / slam mode, the global map's. Waits for the mapping thread's current keyframe, if any.
+  */
+  std::vector<MapPoint> getMapPoints() const;
+
+  //! An edge of the hybrid connectivity graph (keyframe ids as in getKeyframes()).
+  struct GraphEdge {
+    unsigned int a = 0;        //!< first keyframe (pose-pose: the older, marginalised one)
+    unsigned int b = 0;        //!< second keyframe
+    bool covisibility = false; //!< co-visibility edge (else pose-pose: consecutive or shared residuals)
+    unsigned int weight = 0;   //!< co-visibility: points seen by both; pose-pose: 0
+  };
+  //! The graph's edges so far (vo-reuse / slam mode; empty in vo-strict).
+  std::vector<GraphEdge> getGraphEdges() const;
 
   /*!
     Trajectory of every frame that has a pose (camera-to-world), each frame expressed relative to its reference

@@ -17,9 +17,9 @@
 /*!
   \class vpHSlamParameters
   \ingroup group_hslam
-  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, system),
-  each field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part) unless
-  noted.
+  \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, globalMap,
+  system), each field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part)
+  unless noted.
 
   What it is for: no threshold lives in algorithm code; everything a user may tune is here, can be written to and
   read from YAML (cv::FileStorage format, one section per component), and printed. Fields absent from a YAML file
@@ -151,6 +151,24 @@ public:
     int relocalizationMinInliers = 30;  //!< PnP inliers after refinement to accept a relocalisation
   };
 
+  /*!
+    Global map, re-use and hybrid connectivity graph (used from system.mode = vo-reuse on; vo-strict drops what
+    leaves the window). Re-use matches corners by ORB: global points projected into a keyframe are matched within
+    reuseRadiusPx with ORB-SLAM's strict distance (TH_LOW) and ratio; late fusion also asks the depths to agree within
+    fusionSigmas standard deviations (paper sec. 3.3: 2).
+  */
+  struct GlobalMap {
+    int covisibilityMinShared = 15; //!< points two keyframes share to get a co-visibility edge (ORB-SLAM: 15)
+    double cullObservedShare =
+        0.9;                    //!< culling: share of a keyframe's points seen by cullMinObservers others (ORB-SLAM)
+    int cullMinObservers = 3;   //!< culling: other keyframes that must see a point (ORB-SLAM: 3)
+    double reuseRadiusPx = 10.; //!< search radius of a projected global point, pixels at 640 px width
+    int reuseMaxDistance = 50;  //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double reuseRatio = 0.8;    //!< best distance below this times the second best (ORB-SLAM map search)
+    int reuseMaxKeyframes = 10; //!< stored keyframes searched per new keyframe (most overlapping first)
+    double fusionSigmas = 2.;   //!< late fusion: projected depth within this many standard deviations
+  };
+
   //! System-wide behaviour.
   struct System {
     Mode mode = modeVoStrict;              //!< see Mode (odometry only until loop closure exists)
@@ -165,13 +183,14 @@ public:
   Mapper mapper;           //!< window optimisation and point management
   Initializer initializer; //!< monocular initialisation
   Tracking tracking;       //!< hybrid tracking and relocalisation
+  GlobalMap globalMap;     //!< global map re-use and connectivity graph
   System system;           //!< system-wide behaviour
 
   /*!
     Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.
 
     Format (OpenCV FileStorage YAML, see data/hslam-default.yaml): line 1 is "%YAML:1.0"; one map per section
-    (features, tracker, mapper, initializer, tracking, system) whose keys are the member names; booleans are
+    (features, tracker, mapper, initializer, tracking, globalMap, system) whose keys are the member names; booleans are
     true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on their own line
     (OpenCV's reader keeps an end-of-line comment inside an unquoted word). The whole file is checked before anything is
     assigned: on error the object is unchanged. \exception vpHSlamException::fileNotFound, parseError (unknown section

@@ -90,6 +90,15 @@ public:
   void setImagesDataPath(const std::string &path) { m_imagesDataPath = path; }
 
   /*!
+    Times the camera drives the loop (default 1). With laps > 1 every lap revisits the same poses, which is what
+    map re-use and loop closure need to be measured; laps should divide frames - 1 for every lap to start exactly
+    at the pose of frame 0. Takes effect at the next configure().
+    \exception vpHSlamException::invalidArgument for 0.
+  */
+  void setLaps(unsigned int laps);
+  unsigned int getLaps() const { return m_laps; } //!< laps of the loop
+
+  /*!
     Set up the scene, camera and trajectory (loads the textures on first call or when the path changed).
     \param width, height : image size, pixels (>= 16 each). The focal length scales with the width (500 px at 640).
     \param frames : frame count (>= 2); frame frames - 1 has the pose of frame 0.
@@ -165,6 +174,7 @@ private:
 
   std::string m_imagesDataPath, m_loadedPath;
   unsigned int m_width, m_height, m_frames, m_seed;
+  unsigned int m_laps = 1;
   double m_fps;
   Effects m_effects;
   std::unique_ptr<hslam::SyntheticRenderer> m_renderer;

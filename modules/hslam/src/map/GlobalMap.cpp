@@ -1,0 +1,165 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "map/GlobalMap.h"
+
+#include <algorithm>
+
+namespace hslam
+{
+void GlobalMap::clear()
+{
+  m_keyframes.clear();
+  m_shared.clear();
+  m_posePose.clear();
+  m_culled = 0;
+}
+
+void GlobalMap::countShared(const GlobalPoint &p, int host, int sign)
+{
+  // The set of keyframes seeing the point: its host and its observers; every pair of them shares it.
+  const size_t n = p.observers.size();
+  for (size_t i = 0; i <= n; ++i) {
+    const int a = i == n ? host : p.observers[i];
+    for (size_t j = i + 1; j <= n; ++j) {
+      const int b = j == n ? host : p.observers[j];
+      if (a == b) {
+        continue;
+      }
+      int &count = m_shared[std::make_pair(std::min(a, b), std::max(a, b))];
+      count += sign;
+    }
+  }
+}
+
+bool GlobalMap::add(GlobalKeyframe keyframe)
+{
+  const int id = keyframe.id;
+  GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
+  for (const GlobalPoint &p : kf.points) {
+    if (p.state == GlobalPointState::stored) {
+      countShared(p, id, +1);
+    }
+  }
+  return applyCulling(id);
+}
+
+void GlobalMap::addPosePoseEdge(const PosePoseEdge &edge)
+{
+  m_posePose.push_back(edge);
+}
+
+void GlobalMap::absorb(int keyframeId, size_t pointIndex, GlobalPointState state)
+{
+  GlobalKeyframe *kf = find(keyframeId);
+  if (!kf || pointIndex >= kf->points.size() || kf->points[pointIndex].state != GlobalPointState::stored) {
+    return;
+  }
+  GlobalPoint &p = kf->points[pointIndex];
+  countShared(p, keyframeId, -1);
+  p.state = state;
+  // The active point carries the observers on; this copy keeps only what history needs.
+  std::vector<int>().swap(p.observers);
+}
+
+GlobalKeyframe *GlobalMap::find(int id)
+{
+  auto it = m_keyframes.find(id);
+  return it == m_keyframes.end() ? nullptr : &it->second;
+}
+
+const GlobalKeyframe *GlobalMap::find(int id) const
+{
+  auto it = m_keyframes.find(id);
+  return it == m_keyframes.end() ? nullptr : &it->second;
+}
+
+std::vector<CovisibilityEdge> GlobalMap::covisibilityEdges() const
+{
+  std::vector<CovisibilityEdge> out;
+  for (const auto &e : m_shared) {
+    if (e.second < m_options.covisibilityMinShared) {
+      continue;
+    }
+    const GlobalKeyframe *a = find(e.first.first);
+    const GlobalKeyframe *b = find(e.first.second);
+    if ((a && a->culled) || (b && b->culled)) {
+      continue;
+    }
+    CovisibilityEdge edge;
+    edge.a = e.first.first;
+    edge.b = e.first.second;
+    edge.weight = e.second;
+    out.push_back(edge);
+  }
+  return out;
+}
+
+std::vector<int> GlobalMap::covisibleWith(int id) const
+{
+  std::vector<int> out;
+  for (const CovisibilityEdge &e : covisibilityEdges()) {
+    if (e.a == id) {
+      out.push_back(e.b);
+    } else if (e.b == id) {
+      out.push_back(e.a);
+    }
+  }
+  return out;
+}
+
+bool GlobalMap::applyCulling(int id)
+{
+  GlobalKeyframe *kf = find(id);
+  if (!kf || kf->culled) {
+    return false;
+  }
+  size_t considered = 0, redundant = 0;
+  for (const GlobalPoint &p : kf->points) {
+    if (p.state != GlobalPointState::stored) {
+      continue;
+    }
+    ++considered;
+    // Observers that were culled themselves no longer count (ORB-SLAM erases a culled keyframe's observations),
+    // which keeps culling from removing every keyframe of a well-observed stretch.
+    int observers = 0;
+    for (int o : p.observers) {
+      const GlobalKeyframe *other = find(o);
+      observers += (o != id && (!other || !other->culled)) ? 1 : 0;
+    }
+    redundant += observers >= m_options.cullMinObservers ? 1u : 0u;
+  }
+  if (considered == 0 || static_cast<double>(redundant) <= m_options.cullObservedShare * considered) {
+    return false;
+  }
+  kf->culled = true;
+  ++m_culled;
+  return true;
+}
+
+size_t GlobalMap::pointCount() const
+{
+  size_t n = 0;
+  for (const auto &k : m_keyframes) {
+    n += k.second.points.size();
+  }
+  return n;
+}
+
+double GlobalMap::memoryBytes() const
+{
+  // std::map nodes: the value plus about four pointers of bookkeeping each.
+  constexpr double kMapNodeOverhead = 4. * sizeof(void *);
+  double bytes = 0.;
+  for (const auto &k : m_keyframes) {
+    bytes += sizeof(GlobalKeyframe) + kMapNodeOverhead;
+    bytes += static_cast<double>(k.second.points.capacity() * sizeof(GlobalPoint));
+    for (const GlobalPoint &p : k.second.points) {
+      bytes += static_cast<double>(p.observers.capacity() * sizeof(int));
+    }
+  }
+  bytes += static_cast<double>(m_shared.size()) * (sizeof(std::pair<std::pair<int, int>, int>) + kMapNodeOverhead);
+  bytes += static_cast<double>(m_posePose.capacity() * sizeof(PosePoseEdge));
+  return bytes;
+}
+} // namespace hslam

@@ -1,0 +1,153 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file GlobalMap.h
+  \brief The global map: marginalised keyframes kept lean, their points in the window's inverse-depth form, and
+  the hybrid connectivity graph (co-visibility + pose-pose edges) with keyframe culling.
+
+  What it is for: H-SLAM paper sec. 3.3 and ARCHITECTURE.md "Global map" / "Hybrid connectivity graph". When a
+  keyframe leaves the photometric window, the mapper hands it here: pose, affine brightness, exposure and its
+  points (host pixel, inverse depth and variance, ORB descriptor, kind, observers); pyramids, images and patches
+  are released with the window's Keyframe. Re-use (map/GlobalPointReuse.h) reads the points back into the window.
+
+  Co-visibility: a point is seen by its host and by its observers (keyframes where it had an inlier photometric
+  residual); two keyframes share the point when both are in that set. An edge joins keyframes sharing at least
+  covisibilityMinShared points (weight = count). Pose-pose edges join consecutive keyframes and keyframes that
+  shared residuals in the window, with relative pose and information (WindowOptimizer::pairInformation).
+
+  Culling (ORB-SLAM's redundancy rule on this graph): a stored keyframe whose points are observed, for more than
+  cullObservedShare of them, by at least cullMinObservers other keyframes is culled: it leaves the co-visibility
+  graph and the keyframe database (the caller removes it there; observers already culled do not count), but keeps its
+  pose node and pose-pose edges (a control point for the pose graph) and the points it hosts (the map loses no point:
+  the host only defines the parametrisation).
+
+  Threading: not thread-safe; the mapping thread owns it.
+*/
+#ifndef HSLAM_MAP_GLOBAL_MAP_H
+#define HSLAM_MAP_GLOBAL_MAP_H
+
+#include "features/BinaryDescriptor.h"
+#include "map/AffineBrightness.h"
+#include "math/SE3.h"
+
+#include <visp3/core/vpConfig.h>
+
+#include <Eigen/Core>
+
+#include <cstdint>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace hslam
+{
+//! What became of a stored point.
+enum class GlobalPointState : uint8_t {
+  stored,      //!< in the global map, fixed
+  reactivated, //!< early adoption: back in the window, hosted by a new keyframe (this copy is kept for history)
+  fused        //!< late fusion: absorbed by an active point
+};
+
+//! A marginalised point: no patch, everything else of MapPoint.
+struct GlobalPoint {
+  float u = 0.f, v = 0.f;  //!< host pixel, level 0
+  float idepth = 0.f;      //!< inverse depth in the host camera
+  float idepthVar = 0.f;   //!< its variance (from the window Hessian at marginalisation)
+  OrbDescriptor orb;       //!< ORB at the host pixel
+  float orbAngleDeg = 0.f; //!< orientation of the descriptor
+  bool isCorner = false;
+  bool hasOrb = false;
+  GlobalPointState state = GlobalPointState::stored;
+  std::vector<int> observers; //!< other keyframes with an inlier residual (sorted ids)
+};
+
+//! A marginalised keyframe.
+struct GlobalKeyframe {
+  int id = -1;
+  int frameId = -1;
+  int segment = 0;
+  double timestamp = 0.;
+  double exposure = 1.;
+  SE3d cMw;
+  AffineBrightness affine;
+  std::vector<GlobalPoint> points;
+  bool culled = false;
+};
+
+//! Relative pose constraint between two keyframes.
+struct PosePoseEdge {
+  int from = -1, to = -1;
+  SE3d toMfrom;
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  bool consecutive = false; //!< consecutive keyframes (else: shared residuals in the window)
+};
+
+//! Co-visibility edge (a < b).
+struct CovisibilityEdge {
+  int a = -1, b = -1;
+  int weight = 0; //!< points seen by both
+};
+
+//! Graph and culling settings (vpHSlamParameters::GlobalMap).
+struct GlobalMapOptions {
+  int covisibilityMinShared = 15; //!< points two keyframes share to be co-visible (ORB-SLAM)
+  double cullObservedShare = 0.9; //!< culling: share of points observed by enough other keyframes (ORB-SLAM)
+  int cullMinObservers = 3;       //!< ... and how many other keyframes (ORB-SLAM)
+};
+
+class VISP_EXPORT GlobalMap
+{
+public:
+  using Options = GlobalMapOptions;
+
+  explicit GlobalMap(const Options &options = Options()) : m_options(options) {}
+
+  void clear();
+
+  /*!
+    Store a marginalised keyframe and count its points' co-visibility. Returns true when the culling rule removed
+    it at once (its id must then leave the keyframe database).
+  */
+  bool add(GlobalKeyframe keyframe);
+  void addPosePoseEdge(const PosePoseEdge &edge);
+
+  /*!
+    A stored point leaves the global map into the window (early adoption or late fusion): its co-visibility
+    counts are withdrawn (the active point carries its observers on) and its state set.
+  */
+  void absorb(int keyframeId, size_t pointIndex, GlobalPointState state);
+
+  GlobalKeyframe *find(int id);
+  const GlobalKeyframe *find(int id) const;
+  const std::map<int, GlobalKeyframe> &keyframes() const { return m_keyframes; }
+  const std::vector<PosePoseEdge> &posePoseEdges() const { return m_posePose; }
+
+  //! Co-visibility edges of weight >= covisibilityMinShared, culled keyframes left out.
+  std::vector<CovisibilityEdge> covisibilityEdges() const;
+  //! Keyframes co-visible with \e id (any keyframe id, stored or still in the window), culled ones left out.
+  std::vector<int> covisibleWith(int id) const;
+
+  /*!
+    Culling rule of the file comment applied to a stored keyframe (again: later observations may make it
+    redundant). Returns true when it is culled now.
+  */
+  bool applyCulling(int id);
+
+  int culledCount() const { return m_culled; }
+  size_t pointCount() const;
+  //! Bytes held: keyframes, points (with their observer lists), counts and edges.
+  double memoryBytes() const;
+
+private:
+  void countShared(const GlobalPoint &p, int host, int sign);
+
+  Options m_options;
+  std::map<int, GlobalKeyframe> m_keyframes;
+  std::map<std::pair<int, int>, int> m_shared; //!< (a < b) -> points seen by both
+  std::vector<PosePoseEdge> m_posePose;
+  int m_culled = 0;
+};
+} // namespace hslam
+
+#endif

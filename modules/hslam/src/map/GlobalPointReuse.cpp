@@ -1,0 +1,158 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "map/GlobalPointReuse.h"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace hslam
+{
+namespace
+{
+//! Keyframe selection looks at every this-th stored corner (the overlap estimate need not be exact).
+constexpr size_t kSampleStride = 4;
+//! A keyframe not linked by the graph needs this many sampled corners in the target image to be searched.
+constexpr int kMinProjectedSamples = 10;
+//! Projected points must land this far inside the image (ORB's patch needs room; so did the keypoints').
+constexpr double kBorderPx = 16.;
+
+bool projectStored(const SE3d &targetMhost, const PinholeIntrinsics &K, int width, int height, const GlobalPoint &p,
+                   double &u, double &v)
+{
+  if (!(p.idepth > 0.f)) {
+    return false;
+  }
+  const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
+  const Eigen::Vector3d X = targetMhost * (ray / static_cast<double>(p.idepth));
+  if (!(X.z() > 0.)) {
+    return false;
+  }
+  u = K.fx * X.x() / X.z() + K.cx;
+  v = K.fy * X.y() / X.z() + K.cy;
+  return u >= kBorderPx && v >= kBorderPx && u < width - kBorderPx && v < height - kBorderPx;
+}
+} // namespace
+
+std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<int> &windowIds,
+                                      const ReuseTarget &target, int maxKeyframes)
+{
+  std::set<int> linked;
+  for (const CovisibilityEdge &e : map.covisibilityEdges()) {
+    const bool aWindow = std::find(windowIds.begin(), windowIds.end(), e.a) != windowIds.end();
+    const bool bWindow = std::find(windowIds.begin(), windowIds.end(), e.b) != windowIds.end();
+    if (aWindow && !bWindow) {
+      linked.insert(e.b);
+    } else if (bWindow && !aWindow) {
+      linked.insert(e.a);
+    }
+  }
+  std::vector<std::pair<int, int>> scored; // (projected samples, id)
+  for (const auto &entry : map.keyframes()) {
+    const GlobalKeyframe &kf = entry.second;
+    if (kf.segment != target.segment) {
+      continue;
+    }
+    const SE3d targetMhost = target.cMw * kf.cMw.inverse();
+    int projected = 0;
+    size_t corner = 0;
+    for (const GlobalPoint &p : kf.points) {
+      if (p.state != GlobalPointState::stored || !p.hasOrb || !p.isCorner || (corner++ % kSampleStride) != 0) {
+        continue;
+      }
+      double u, v;
+      projected += projectStored(targetMhost, target.K, target.width, target.height, p, u, v) ? 1 : 0;
+    }
+    if (projected >= kMinProjectedSamples || (projected > 0 && linked.count(kf.id))) {
+      scored.emplace_back(projected, kf.id);
+    }
+  }
+  // Most overlap first; ties: the newest keyframe (larger id) first, so the order is deterministic.
+  std::sort(scored.begin(), scored.end(), [](const std::pair<int, int> &a, const std::pair<int, int> &b) {
+    return a.first != b.first ? a.first > b.first : a.second > b.second;
+  });
+  std::vector<int> out;
+  for (size_t i = 0; i < scored.size() && static_cast<int>(i) < maxKeyframes; ++i) {
+    out.push_back(scored[i].second);
+  }
+  return out;
+}
+
+bool transferIdepth(const SE3d &targetMhost, const PinholeIntrinsics &K, double u, double v, double idepth, double var,
+                    double &targetU, double &targetV, double &targetIdepth, double &targetVar)
+{
+  if (!(idepth > 0.)) {
+    return false;
+  }
+  // X_target = R ray / rho + t, so rho' = 1 / z' = rho / (r_z + t_z rho) and d rho' / d rho = r_z / (r_z + t_z rho)^2.
+  const Eigen::Vector3d ray((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.);
+  const Eigen::Vector3d r = targetMhost.rotationMatrix() * ray;
+  const Eigen::Vector3d t = targetMhost.translation();
+  const double denom = r.z() + t.z() * idepth;
+  if (!(denom > 0.)) {
+    return false;
+  }
+  const Eigen::Vector3d q = r + t * idepth; // proportional to X_target
+  targetU = K.fx * q.x() / q.z() + K.cx;
+  targetV = K.fy * q.y() / q.z() + K.cy;
+  targetIdepth = idepth / denom;
+  const double d = r.z() / (denom * denom);
+  targetVar = var * d * d;
+  return std::isfinite(targetIdepth) && std::isfinite(targetVar);
+}
+
+double fuseInverseVariance(double a, double varA, double b, double varB, double &var)
+{
+  const double wa = 1. / varA, wb = 1. / varB;
+  var = 1. / (wa + wb);
+  return (wa * a + wb * b) * var;
+}
+
+std::vector<ReuseMatch> matchGlobalPoints(const GlobalMap &map, const std::vector<int> &keyframes,
+                                          const ReuseTarget &target, const OrbMatcherOptions &options)
+{
+  std::vector<ProjectedPoint> projected;
+  std::vector<ReuseMatch> info; // same order as projected
+  for (int id : keyframes) {
+    const GlobalKeyframe *kf = map.find(id);
+    if (!kf) {
+      continue;
+    }
+    const SE3d targetMhost = target.cMw * kf->cMw.inverse();
+    for (size_t i = 0; i < kf->points.size(); ++i) {
+      const GlobalPoint &p = kf->points[i];
+      if (p.state != GlobalPointState::stored || !p.hasOrb || !p.isCorner) {
+        continue;
+      }
+      ReuseMatch m;
+      double u, v;
+      if (!transferIdepth(targetMhost, target.K, p.u, p.v, p.idepth, p.idepthVar, u, v, m.idepth, m.idepthVar) ||
+          u < kBorderPx || v < kBorderPx || u >= target.width - kBorderPx || v >= target.height - kBorderPx) {
+        continue;
+      }
+      m.keyframeId = id;
+      m.pointIndex = i;
+      ProjectedPoint pp;
+      pp.u = static_cast<float>(u);
+      pp.v = static_cast<float>(v);
+      pp.angleDeg = p.orbAngleDeg;
+      pp.descriptor = p.orb;
+      projected.push_back(pp);
+      info.push_back(m);
+    }
+  }
+  std::vector<ReuseMatch> out;
+  if (projected.empty() || target.keypoints.empty()) {
+    return out;
+  }
+  const OrbMatcher matcher(target.keypoints, target.width, target.height, options);
+  for (const OrbMatch &match : matcher.matchProjected(projected)) {
+    ReuseMatch m = info[static_cast<size_t>(match.point)];
+    m.keypoint = match.keypoint;
+    m.distance = match.distance;
+    out.push_back(m);
+  }
+  return out;
+}
+} // namespace hslam

@@ -1,0 +1,235 @@
+// Global map (issue 9): inverse-variance fusion, inverse-depth transfer between cameras, co-visibility counting,
+// the culling rule on a hand-built graph, ORB re-use matching, and what a stored keyframe costs in memory.
+#include "map/GlobalMap.h"
+#include "map/GlobalPointReuse.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+namespace
+{
+using hslam::GlobalKeyframe;
+using hslam::GlobalMap;
+using hslam::GlobalPoint;
+using hslam::GlobalPointState;
+using hslam::PinholeIntrinsics;
+using hslam::SE3d;
+
+PinholeIntrinsics intrinsics()
+{
+  PinholeIntrinsics K;
+  K.fx = K.fy = 500.;
+  K.cx = 319.5;
+  K.cy = 239.5;
+  return K;
+}
+
+GlobalPoint pointWithObservers(std::vector<int> observers)
+{
+  GlobalPoint p;
+  p.u = 100.f;
+  p.v = 100.f;
+  p.idepth = 0.5f;
+  p.idepthVar = 1e-4f;
+  p.observers = observers;
+  return p;
+}
+
+TEST(GlobalMap, InverseVarianceFusion)
+{
+  double var = 0.;
+  // Equal variances: the mean, half the variance.
+  EXPECT_DOUBLE_EQ(hslam::fuseInverseVariance(1., 0.04, 3., 0.04, var), 2.);
+  EXPECT_DOUBLE_EQ(var, 0.02);
+  // Variances 1 and 3: weights 3/4 and 1/4, variance 3/4.
+  EXPECT_NEAR(hslam::fuseInverseVariance(0., 1., 4., 3., var), 1., 1e-12);
+  EXPECT_NEAR(var, 0.75, 1e-12);
+  // A much more certain estimate dominates.
+  EXPECT_NEAR(hslam::fuseInverseVariance(10., 1e-8, 0., 1., var), 10., 1e-6);
+}
+
+TEST(GlobalMap, InverseDepthTransferMatchesProjectionAndNumericVariance)
+{
+  const PinholeIntrinsics K = intrinsics();
+  SE3d::Tangent xi;
+  xi << 0.2, -0.1, 0.3, 0.05, -0.08, 0.02;
+  const SE3d targetMhost = SE3d::exp(xi);
+  const double u = 250., v = 180., idepth = 0.4, var = 1e-4;
+  double tu, tv, tIdepth, tVar;
+  ASSERT_TRUE(hslam::transferIdepth(targetMhost, K, u, v, idepth, var, tu, tv, tIdepth, tVar));
+  const Eigen::Vector3d X = targetMhost * (Eigen::Vector3d((u - K.cx) / K.fx, (v - K.cy) / K.fy, 1.) / idepth);
+  EXPECT_NEAR(tu, K.fx * X.x() / X.z() + K.cx, 1e-9);
+  EXPECT_NEAR(tv, K.fy * X.y() / X.z() + K.cy, 1e-9);
+  EXPECT_NEAR(tIdepth, 1. / X.z(), 1e-12);
+  // Variance: (d rho' / d rho)^2 var, the derivative by central differences.
+  const double h = 1e-6;
+  double a, b, rp, rm, dummy;
+  ASSERT_TRUE(hslam::transferIdepth(targetMhost, K, u, v, idepth + h, var, a, b, rp, dummy));
+  ASSERT_TRUE(hslam::transferIdepth(targetMhost, K, u, v, idepth - h, var, a, b, rm, dummy));
+  const double d = (rp - rm) / (2. * h);
+  EXPECT_NEAR(tVar, d * d * var, 1e-6 * tVar);
+  // Behind the target camera: refused.
+  SE3d::Tangent back;
+  back << 0., 0., -10., 0., 0., 0.;
+  EXPECT_FALSE(hslam::transferIdepth(SE3d::exp(back), K, u, v, idepth, var, tu, tv, tIdepth, tVar));
+}
+
+TEST(GlobalMap, CovisibilityCountsSharedPointsAndAbsorbWithdrawsThem)
+{
+  hslam::GlobalMapOptions options;
+  options.covisibilityMinShared = 3;
+  options.cullObservedShare = 1.; // no culling here
+  GlobalMap map(options);
+  GlobalKeyframe kf;
+  kf.id = 0;
+  // 3 points seen by 0 (host), 1 and 2; 2 more by 0 and 1 only.
+  for (int i = 0; i < 3; ++i) {
+    kf.points.push_back(pointWithObservers({1, 2}));
+  }
+  for (int i = 0; i < 2; ++i) {
+    kf.points.push_back(pointWithObservers({1}));
+  }
+  EXPECT_FALSE(map.add(kf));
+  std::vector<hslam::CovisibilityEdge> edges = map.covisibilityEdges();
+  ASSERT_EQ(edges.size(), 3u); // 0-1 (5), 0-2 (3), 1-2 (3)
+  for (const hslam::CovisibilityEdge &e : edges) {
+    const int expected = (e.a == 0 && e.b == 1) ? 5 : 3;
+    EXPECT_EQ(e.weight, expected) << e.a << "-" << e.b;
+  }
+  // One point of the triple goes back into the window: 0-2 and 1-2 drop below 3 shared points.
+  map.absorb(0, 0, GlobalPointState::reactivated);
+  edges = map.covisibilityEdges();
+  ASSERT_EQ(edges.size(), 1u);
+  EXPECT_EQ(edges[0].weight, 4);
+  EXPECT_EQ(map.find(0)->points[0].state, GlobalPointState::reactivated);
+  EXPECT_EQ(map.covisibleWith(1), std::vector<int>({0}));
+}
+
+TEST(GlobalMap, CullingRuleOnHandBuiltGraph)
+{
+  GlobalMap map; // 90 % of the points seen by at least 3 other keyframes
+  // Keyframe 0: 10 points, 9 seen by 3 others (exactly 90 %: not over it, kept).
+  GlobalKeyframe k0;
+  k0.id = 0;
+  for (int i = 0; i < 9; ++i) {
+    k0.points.push_back(pointWithObservers({1, 2, 3}));
+  }
+  k0.points.push_back(pointWithObservers({1, 2}));
+  EXPECT_FALSE(map.add(k0));
+  // Keyframe 4: 10 points, all seen by 3 others: culled at once.
+  GlobalKeyframe k4;
+  k4.id = 4;
+  for (int i = 0; i < 10; ++i) {
+    k4.points.push_back(pointWithObservers({5, 6, 7}));
+  }
+  EXPECT_TRUE(map.add(k4));
+  EXPECT_TRUE(map.find(4)->culled);
+  EXPECT_EQ(map.culledCount(), 1);
+  // A culled keyframe leaves the co-visibility graph but keeps its points.
+  for (const hslam::CovisibilityEdge &e : map.covisibilityEdges()) {
+    EXPECT_NE(e.a, 4);
+    EXPECT_NE(e.b, 4);
+  }
+  EXPECT_EQ(map.find(4)->points.size(), 10u);
+  // Keyframe 8: all points seen by 5, 6 and 4; 4 is culled, so only two observers count: kept.
+  GlobalKeyframe k8;
+  k8.id = 8;
+  for (int i = 0; i < 10; ++i) {
+    k8.points.push_back(pointWithObservers({4, 5, 6}));
+  }
+  EXPECT_FALSE(map.add(k8));
+  // Pose-pose edges stay whatever the culling.
+  hslam::PosePoseEdge e;
+  e.from = 4;
+  e.to = 5;
+  map.addPosePoseEdge(e);
+  EXPECT_EQ(map.posePoseEdges().size(), 1u);
+}
+
+TEST(GlobalMap, ReuseMatchingFindsProjectedCornersAndCarriesTheirDepth)
+{
+  const PinholeIntrinsics K = intrinsics();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> pixel(40., 600.), pixelV(40., 440.), inv(0.2, 1.);
+  std::uniform_int_distribution<int> bit(0, 1);
+  GlobalMap map;
+  GlobalKeyframe kf;
+  kf.id = 3;
+  kf.cMw = SE3d();
+  const int n = 60;
+  for (int i = 0; i < n; ++i) {
+    GlobalPoint p = pointWithObservers({});
+    p.u = static_cast<float>(pixel(rng));
+    p.v = static_cast<float>(pixelV(rng));
+    p.idepth = static_cast<float>(inv(rng));
+    p.hasOrb = p.isCorner = true;
+    for (int b = 0; b < 256; ++b) {
+      if (bit(rng)) {
+        p.orb.words[b / 64] |= (uint64_t(1) << (b % 64));
+      }
+    }
+    kf.points.push_back(p);
+  }
+  map.add(kf);
+  // The target camera moved 5 cm sideways; its keypoints are the exact projections with the same descriptors.
+  hslam::ReuseTarget target;
+  SE3d::Tangent xi;
+  xi << 0.05, 0., 0., 0., 0., 0.;
+  target.cMw = SE3d::exp(xi);
+  target.K = K;
+  target.width = 640;
+  target.height = 480;
+  std::vector<double> expectedIdepth;
+  for (const GlobalPoint &p : kf.points) {
+    double u, v, r, var;
+    ASSERT_TRUE(hslam::transferIdepth(target.cMw, K, p.u, p.v, p.idepth, p.idepthVar, u, v, r, var));
+    hslam::FrameKeypoint k;
+    k.u = static_cast<float>(u);
+    k.v = static_cast<float>(v);
+    k.descriptor = p.orb;
+    target.keypoints.push_back(k);
+    expectedIdepth.push_back(r);
+  }
+  const std::vector<int> selected = hslam::selectReuseKeyframes(map, {}, target, 10);
+  ASSERT_EQ(selected, std::vector<int>({3}));
+  hslam::OrbMatcherOptions options;
+  options.maxDistance = 50;
+  options.ratio = 0.8f;
+  const std::vector<hslam::ReuseMatch> matches = hslam::matchGlobalPoints(map, selected, target, options);
+  // Points projecting within 16 px of the border are not searched; every other one must match its own keypoint.
+  int inside = 0;
+  for (const hslam::FrameKeypoint &k : target.keypoints) {
+    inside += (k.u >= 16.f && k.v >= 16.f && k.u < 624.f && k.v < 464.f) ? 1 : 0;
+  }
+  EXPECT_EQ(static_cast<int>(matches.size()), inside);
+  for (const hslam::ReuseMatch &m : matches) {
+    EXPECT_EQ(m.keypoint, static_cast<int>(m.pointIndex));
+    EXPECT_NEAR(m.idepth, expectedIdepth[m.pointIndex], 1e-9);
+    EXPECT_EQ(m.distance, 0);
+  }
+  // Absorbed points are not offered again.
+  map.absorb(3, 0, GlobalPointState::reactivated);
+  EXPECT_EQ(hslam::matchGlobalPoints(map, selected, target, options).size(), matches.size() - 1u);
+}
+
+TEST(GlobalMap, StoredKeyframeCostsFarLessThanHalfAMegabyte)
+{
+  // A stored keyframe of 2000 points (more than a window keyframe hosts), each seen by 4 others: what the global
+  // map holds for it, counted by memoryBytes(), must stay under the issue's 0.5 MB.
+  GlobalMap map;
+  GlobalKeyframe kf;
+  kf.id = 10;
+  for (int i = 0; i < 2000; ++i) {
+    kf.points.push_back(pointWithObservers({11, 12, 13, 14}));
+  }
+  const double before = map.memoryBytes();
+  map.add(kf);
+  const double bytes = map.memoryBytes() - before;
+  std::printf("stored keyframe of 2000 points: %.1f KB\n", bytes / 1024.);
+  EXPECT_GT(bytes, 2000. * sizeof(GlobalPoint)); // everything is counted
+  EXPECT_LT(bytes, 0.5 * 1024. * 1024.);
+}
+} // namespace
