@@ -43,59 +43,7 @@ perturb_key="${PERTURB_KEY:-features.desiredImmatureDensity}"
 perturb_values="${PERTURB_VALUES:-490 495 500 505 510}"
 blackout_sequence="${BLACKOUT_SEQUENCE:-7scenes_redkitchen_000-299}"
 blackout="${BLACKOUT:-120:160}"
-dataset="$build/tutorials/tutorial-hslam-dataset"
-evaluate="$build/tutorials/tutorial-hslam-evaluate"
-for program in "$dataset" "$evaluate"; do
-  [[ -x "$program" ]] || { echo "error: $program not built (cmake --build $build --target $(basename "$program"))" >&2; exit 1; }
-done
-mkdir -p "$out" || exit 1
-
-groundtruth() {
-  case "$1" in
-    kitti*) echo "$data/$1/groundtruth_tum.txt" ;;
-    euroc*) echo "$data/$1/groundtruth_cam0_tum.txt" ;;
-    *) echo "$data/$1/groundtruth.txt" ;;
-  esac
-}
-
-json() { # json FILE KEY -> the value (strings without their quotes), "nan" when absent
-  local value
-  value="$(sed -n "s/^ *\"$2\": *\([^,]*\),\{0,1\}$/\1/p" "$1" 2>/dev/null | head -n 1 | tr -d '"')"
-  [[ -z "$value" || "$value" == null ]] && value=nan
-  echo "$value"
-}
-
-has_section() { [[ " $sections " == *" $1 "* ]]; }
-
-# run PREFIX SEQUENCE OPTIONS...: one run and its evaluation; files PREFIX.{txt,json,log,ate}. A run already made by
-# this invocation (same prefix) is reused. Returns non-zero, after printing a line, when the run failed.
-declare -A made=()
-failures=0
-run() {
-  local prefix="$1" seq="$2"
-  shift 2
-  if [[ -n "${made[$prefix]:-}" ]]; then
-    return "${made[$prefix]}"
-  fi
-  rm -f "$prefix.txt" "$prefix.json" "$prefix.ate"
-  local status=0
-  "$dataset" --input "$data/$seq" --deterministic --no-display --quiet --trajectory "$prefix.txt" \
-    --stats "$prefix.json" "$@" "${extra[@]}" > "$prefix.log" 2>&1 || status=$?
-  if [[ $status -ne 0 || ! -s "$prefix.json" ]]; then
-    echo "$seq $*: tutorial-hslam-dataset failed (exit $status), see $prefix.log"
-    made[$prefix]=1
-    failures=$((failures + 1))
-    return 1
-  fi
-  local ate
-  ate="$("$evaluate" --groundtruth "$(groundtruth "$seq")" --estimate "$prefix.txt" 2>/dev/null | sed -n "s/^ate_rmse_m=//p")"
-  echo "${ate:-nan}" > "$prefix.ate"
-  made[$prefix]=0
-  return 0
-}
-
-tracked() { echo "$(json "$1.json" tracked_frames)/$(json "$1.json" frames)"; }
-ate() { cat "$1.ate" 2>/dev/null || echo nan; }
+source "$repo/tutorials/benchmark-common.sh"
 
 available=()
 for seq in $sequences; do
@@ -131,8 +79,7 @@ if has_section spread; then
           ates+=(nan)
         fi
       done
-      median="$(printf "%s\n" "${ates[@]}" | grep -v nan | sort -g | awk '{ a[NR] = $1 } END { if (NR == 0) { print "nan" } else if (NR % 2) { print a[(NR + 1) / 2] } else { print (a[NR / 2] + a[NR / 2 + 1]) / 2 } }')"
-      printf "%-28s %-8s median %8s   runs %s\n" "$seq" "$mode" "$median" "${ates[*]}"
+      printf "%-28s %-8s median %8s   runs %s\n" "$seq" "$mode" "$(median "${ates[@]}")" "${ates[*]}"
     done
   done
   echo

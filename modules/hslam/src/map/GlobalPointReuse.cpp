@@ -58,7 +58,8 @@ std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<in
     int projected = 0;
     size_t corner = 0;
     for (const GlobalPoint &p : kf.points) {
-      if (p.state != GlobalPointState::stored || !p.hasOrb || !p.isCorner || (corner++ % kSampleStride) != 0) {
+      if (p.state != GlobalPointState::stored || !p.hasOrb || (target.cornersOnly && !p.isCorner) ||
+          (corner++ % kSampleStride) != 0) {
         continue;
       }
       double u, v;
@@ -122,7 +123,7 @@ std::vector<ReuseMatch> matchGlobalPoints(const GlobalMap &map, const std::vecto
     const SE3d targetMhost = target.cMw * kf->cMw.inverse();
     for (size_t i = 0; i < kf->points.size(); ++i) {
       const GlobalPoint &p = kf->points[i];
-      if (p.state != GlobalPointState::stored || !p.hasOrb || !p.isCorner) {
+      if (p.state != GlobalPointState::stored || !p.hasOrb || (target.cornersOnly && !p.isCorner)) {
         continue;
       }
       ReuseMatch m;

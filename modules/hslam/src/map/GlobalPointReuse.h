@@ -33,7 +33,8 @@ struct ReuseTarget {
   PinholeIntrinsics K;
   int width = 0, height = 0;
   int segment = 0;
-  std::vector<FrameKeypoint> keypoints; //!< its corners with descriptors (host pixels)
+  bool cornersOnly = true;              //!< search only global points that were FAST corners (else every described one)
+  std::vector<FrameKeypoint> keypoints; //!< its points with descriptors (host pixels)
 };
 
 //! A global point matched to a keypoint of the target.

@@ -64,12 +64,15 @@ std::vector<PairInformation> WindowOptimizer::pairInformation(int keyframeId)
   if (idx < 0) {
     return out;
   }
-  syncStatesAndPoints();
-  prepareContext();
   const int n = static_cast<int>(m_frames.size());
-  WindowAccumulator acc;
-  acc.reset(n);
-  linearizeRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), acc);
+  WindowAccumulator fresh;
+  if (!m_accCurrent) {
+    syncStatesAndPoints();
+    prepareContext();
+    fresh.reset(n);
+    linearizeRange(m_ctx, m_points, m_allPoints, 0, m_allPoints.size(), m_hxp.data(), fresh);
+  }
+  const WindowAccumulator &acc = m_accCurrent ? m_acc : fresh;
   std::vector<int> count(static_cast<size_t>(n), 0);
   for (const WindowPoint &p : m_points) {
     for (const WindowResidual &r : p.residuals) {
@@ -106,6 +109,7 @@ std::vector<PairInformation> WindowOptimizer::pairInformation(int keyframeId)
 
 void WindowOptimizer::marginalizeKeyframe(int keyframeId)
 {
+  m_accCurrent = false;
   int idx = -1;
   for (size_t i = 0; i < m_frames.size(); ++i) {
     if (m_frames[i].kf->id() == keyframeId) {

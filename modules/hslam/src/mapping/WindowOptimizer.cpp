@@ -63,6 +63,7 @@ void WindowOptimizer::setPhotometricallyCalibrated(bool calibrated)
 
 void WindowOptimizer::addKeyframe(const KeyframePtr &keyframe)
 {
+  m_accCurrent = false;
   if (!keyframe || !keyframe->frame || keyframe->frame->pyramid.numLevels() < 1) {
     throw vpHSlamException(vpHSlamException::invalidArgument, where(__LINE__) + "keyframe without frame or pyramid");
   }
@@ -568,6 +569,7 @@ OptimizationSummary WindowOptimizer::optimize(int maxIterations)
   summary.inlierResiduals = m_acc.inliers;
   finalizeOutliers(summary);
   writeBack();
+  m_accCurrent = true; // m_acc holds the linearisation at the final states (pairInformation() re-uses it)
   summary.totalMs = elapsedMs(t0);
   summary.msPerIteration = summary.iterations > 0 ? summary.totalMs / summary.iterations : 0.;
   return summary;

@@ -145,7 +145,9 @@ public:
 
   /*!
     For the connectivity graph, before marginalizeKeyframe(): the pose-pose information of window keyframe
-    \e keyframeId with every other window keyframe it shares inlier residuals with (linearises all points once).
+    \e keyframeId with every other window keyframe it shares inlier residuals with. Re-uses the last optimize()'s
+    linearisation while no keyframe was added or marginalised since (else linearises all points once), so the
+    mapper asks for every keyframe it will marginalise right after optimize().
   */
   std::vector<PairInformation> pairInformation(int keyframeId);
 
@@ -229,6 +231,7 @@ private:
 
   WindowContext m_ctx;
   WindowAccumulator m_acc;
+  bool m_accCurrent = false; //!< m_acc is the linearisation at the current states of the current window
   std::unique_ptr<WorkerPool> m_pool;         //!< system.workerThreads threads (+ the caller)
   std::vector<WindowAccumulator> m_workerAcc; //!< one per pool participant, merged in participant order
   std::vector<double> m_workerEnergy;         //!< energyAll(): one partial sum per participant

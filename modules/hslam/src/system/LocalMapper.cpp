@@ -276,6 +276,13 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf)
     m_initializationFailed = true;
   }
   const double t1 = threadCpuMs();
+  m.pendingPairs.clear();
+  if (keepsGlobalMap()) {
+    // Pose-pose links of the keyframes about to leave, from this optimisation's linearisation (free now).
+    for (int id : toMarginalize) {
+      m.pendingPairs[id] = m.optimizer.pairInformation(id);
+    }
+  }
   buildReferencePoints();
   dropPointsOutOfView(*kf);
   makeNewImmaturePoints(*kf);
@@ -393,7 +400,8 @@ void LocalMapper::marginalize(int keyframeId)
   }
   std::vector<PairInformation> pairs;
   if (keepsGlobalMap()) {
-    pairs = m.optimizer.pairInformation(keyframeId);
+    auto pending = m.pendingPairs.find(keyframeId);
+    pairs = pending != m.pendingPairs.end() ? pending->second : m.optimizer.pairInformation(keyframeId);
   }
   m.optimizer.marginalizeKeyframe(keyframeId);
   if (m.relocalization) {

@@ -120,10 +120,13 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
   target.width = m.width;
   target.height = m.height;
   target.segment = m_segment;
+  // Corners only: re-using every described point (gradient pixels too, without the added corners) was measured
+  // worse (fast preset, hybrid, median of 5 runs: Tsukuba 0.334 cm vs 0.276 with corners).
+  target.cornersOnly = true;
   std::vector<size_t> keypointToImmature;
   for (size_t i = 0; i < newest.immature.size(); ++i) {
     const ImmaturePoint &pt = newest.immature[i];
-    if (pt.hasOrb && pt.isCorner) {
+    if (pt.hasOrb && (pt.isCorner || !target.cornersOnly)) {
       FrameKeypoint k;
       k.u = pt.u;
       k.v = pt.v;
@@ -188,10 +191,11 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
     t.width = m.width;
     t.height = m.height;
     t.segment = m_segment;
+    t.cornersOnly = target.cornersOnly;
     std::vector<size_t> keypointToPoint;
     for (size_t i = 0; i < host->points.size(); ++i) {
       const MapPoint &p = host->points[i];
-      if (p.status == PointStatus::active && p.hasOrb && p.isCorner && !p.fromGlobalMap) {
+      if (p.status == PointStatus::active && p.hasOrb && (p.isCorner || !t.cornersOnly) && !p.fromGlobalMap) {
         FrameKeypoint k;
         k.u = p.u;
         k.v = p.v;

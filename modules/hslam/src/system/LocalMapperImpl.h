@@ -16,6 +16,7 @@
 #include "tracking/CoarseTracker.h"
 #include "tracking/RelocalizationIndex.h"
 
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -74,6 +75,7 @@ struct LocalMapper::Impl {
   int referenceKeyframe = -1;
   std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
   int keyframesInSegment = 0;
+  std::map<int, std::vector<PairInformation>> pendingPairs; //!< pose-pose links of the keyframes being marginalised
 };
 } // namespace hslam
 
