@@ -1,0 +1,122 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "loop/PoseGraph.h"
+
+#include "loop/Sim3Parameters.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <ceres/ceres.h>
+
+#include <chrono>
+
+namespace hslam
+{
+namespace
+{
+static_assert(kSim3ParameterSize == 8, "PoseGraph stores vertices in the layout of Sim3Parameters.h");
+
+struct RelativeSim3Error {
+  explicit RelativeSim3Error(const PoseGraphEdge &e) : Sji(e.Sji), W(e.sqrtInformation) {}
+  template <typename T> bool operator()(const T *xi, const T *xj, T *residual) const
+  {
+    // log(S_ji_measured S_iw S_jw^-1): identity when the estimates agree with the measurement.
+    const Sim3<T> Siw = sim3FromParameters(xi);
+    const Sim3<T> Sjw = sim3FromParameters(xj);
+    const Eigen::Matrix<T, 7, 1> e = (Sji.cast<T>() * Siw * Sjw.inverse()).log();
+    Eigen::Map<Eigen::Matrix<T, 7, 1>> r(residual);
+    r = W.cast<T>() * e;
+    return true;
+  }
+  Sim3d Sji; //!< the measurement
+  Eigen::Matrix<double, 7, 7> W;
+};
+} // namespace
+
+void PoseGraph::addVertex(int id, const Sim3d &Siw, bool fixed)
+{
+  Vertex v;
+  sim3ToParameters(Siw, v.x.data());
+  v.fixed = fixed;
+  m_vertices[id] = v;
+}
+
+void PoseGraph::addEdge(const PoseGraphEdge &edge)
+{
+  if (!m_vertices.count(edge.i) || !m_vertices.count(edge.j) || edge.i == edge.j) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "PoseGraph: edge " + std::to_string(edge.i) + "-" +
+                                                                  std::to_string(edge.j) +
+                                                                  " joins unknown or identical vertices");
+  }
+  m_edges.push_back(edge);
+}
+
+void PoseGraph::addEdgeFromCurrent(int i, int j, double weight)
+{
+  PoseGraphEdge e;
+  e.i = i;
+  e.j = j;
+  if (!m_vertices.count(i) || !m_vertices.count(j)) {
+    addEdge(e); // throws
+  }
+  e.Sji = vertex(j) * vertex(i).inverse();
+  e.sqrtInformation = weight * Eigen::Matrix<double, 7, 7>::Identity();
+  addEdge(e);
+}
+
+Sim3d PoseGraph::vertex(int id) const
+{
+  auto it = m_vertices.find(id);
+  if (it == m_vertices.end()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "PoseGraph: unknown vertex " + std::to_string(id));
+  }
+  return sim3FromParameters(it->second.x.data());
+}
+
+PoseGraphSummary PoseGraph::optimize(int maxIterations)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  PoseGraphSummary out;
+  if (m_edges.empty()) {
+    out.usable = true;
+    return out;
+  }
+  ceres::Problem::Options problemOptions;
+  problemOptions.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problemOptions);
+  for (const PoseGraphEdge &e : m_edges) {
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<RelativeSim3Error, 7, kVertexParameters, kVertexParameters>(
+            new RelativeSim3Error(e)),
+        nullptr, m_vertices[e.i].x.data(), m_vertices[e.j].x.data());
+  }
+  for (auto &entry : m_vertices) {
+    double *x = entry.second.x.data();
+    if (!problem.HasParameterBlock(x)) {
+      continue;
+    }
+    problem.SetManifold(x, newSim3Manifold());
+    if (entry.second.fixed) {
+      problem.SetParameterBlockConstant(x);
+    }
+  }
+  ceres::Solver::Options options;
+  options.max_num_iterations = maxIterations;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  std::map<int, Vertex> backup = m_vertices;
+  ceres::Solve(options, &problem, &summary);
+  out.usable = summary.IsSolutionUsable();
+  if (!out.usable) {
+    m_vertices.swap(backup);
+  }
+  out.iterations = static_cast<int>(summary.iterations.size());
+  out.initialCost = summary.initial_cost;
+  out.finalCost = summary.final_cost;
+  out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+} // namespace hslam
