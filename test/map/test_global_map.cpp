@@ -110,41 +110,48 @@ TEST(GlobalMap, CovisibilityCountsSharedPointsAndAbsorbWithdrawsThem)
 
 TEST(GlobalMap, CullingRuleOnHandBuiltGraph)
 {
-  GlobalMap map; // 90 % of the points seen by at least 3 other keyframes
-  // Keyframe 0: 10 points, 9 seen by 3 others (exactly 90 %: not over it, kept).
+  GlobalMap map; // 90 % of the points seen by at least 3 keyframes from outside the host's window (7 ids)
+  // Keyframe 0: 10 points, 9 seen by 3 far keyframes (exactly 90 %: not over it, kept).
   GlobalKeyframe k0;
   k0.id = 0;
   for (int i = 0; i < 9; ++i) {
-    k0.points.push_back(pointWithObservers({1, 2, 3}));
+    k0.points.push_back(pointWithObservers({20, 30, 40}));
   }
-  k0.points.push_back(pointWithObservers({1, 2}));
+  k0.points.push_back(pointWithObservers({20, 30}));
   EXPECT_FALSE(map.add(k0));
-  // Keyframe 4: 10 points, all seen by 3 others: culled at once.
-  GlobalKeyframe k4;
-  k4.id = 4;
+  // Keyframe 50: every point seen by 3 far keyframes: culled at once.
+  GlobalKeyframe k50;
+  k50.id = 50;
   for (int i = 0; i < 10; ++i) {
-    k4.points.push_back(pointWithObservers({5, 6, 7}));
+    k50.points.push_back(pointWithObservers({60, 70, 80}));
   }
-  EXPECT_TRUE(map.add(k4));
-  EXPECT_TRUE(map.find(4)->culled);
+  EXPECT_TRUE(map.add(k50));
+  EXPECT_TRUE(map.find(50)->culled);
   EXPECT_EQ(map.culledCount(), 1);
   // A culled keyframe leaves the co-visibility graph but keeps its points.
   for (const hslam::CovisibilityEdge &e : map.covisibilityEdges()) {
-    EXPECT_NE(e.a, 4);
-    EXPECT_NE(e.b, 4);
+    EXPECT_NE(e.a, 50);
+    EXPECT_NE(e.b, 50);
   }
-  EXPECT_EQ(map.find(4)->points.size(), 10u);
-  // Keyframe 8: all points seen by 5, 6 and 4; 4 is culled, so only two observers count: kept.
-  GlobalKeyframe k8;
-  k8.id = 8;
+  EXPECT_EQ(map.find(50)->points.size(), 10u);
+  // Keyframe 100: seen by 50, 60 and 70, but 50 is culled: two observers count, kept.
+  GlobalKeyframe k100;
+  k100.id = 100;
   for (int i = 0; i < 10; ++i) {
-    k8.points.push_back(pointWithObservers({4, 5, 6}));
+    k100.points.push_back(pointWithObservers({50, 60, 70}));
   }
-  EXPECT_FALSE(map.add(k8));
+  EXPECT_FALSE(map.add(k100));
+  // Keyframe 200: seen by its window neighbours only (a sliding window sees every point): kept.
+  GlobalKeyframe k200;
+  k200.id = 200;
+  for (int i = 0; i < 10; ++i) {
+    k200.points.push_back(pointWithObservers({201, 202, 203, 204, 205, 206}));
+  }
+  EXPECT_FALSE(map.add(k200));
   // Pose-pose edges stay whatever the culling.
   hslam::PosePoseEdge e;
-  e.from = 4;
-  e.to = 5;
+  e.from = 50;
+  e.to = 51;
   map.addPosePoseEdge(e);
   EXPECT_EQ(map.posePoseEdges().size(), 1u);
 }

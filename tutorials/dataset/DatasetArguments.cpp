@@ -99,7 +99,8 @@ void printUsage(const char *program, std::ostream &out)
   out << "Usage: " << program
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--fps HZ]\n"
-         "       [--mode vo-strict|vo-reuse] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed X]\n"
+         "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed "
+         "X]\n"
          "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
          "[--keyframes OUT.txt]\n"
          "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--skip-unreadable] [--log-level LEVEL] "
@@ -123,8 +124,9 @@ void printUsage(const char *program, std::ostream &out)
          "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
          "                     and timestamp: a covered lens (default: none)\n"
          "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        vo-strict (window only, DSO-like; default) or vo-reuse (marginalised points kept\n"
-         "                     as a global map and re-used in the window; slam is not implemented yet)\n"
+         "  --mode NAME        vo-strict (window only, DSO-like; default), vo-reuse (marginalised points kept\n"
+         "                     as a global map and re-used in the window) or slam (vo-reuse plus loop detection\n"
+         "                     and Sim(3) verification; loops are reported, the map is NOT corrected yet)\n"
          "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
          "                     default: tracking.mode of --config, else direct\n"
          "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
@@ -274,10 +276,6 @@ vpHSlamParameters makeParameters(const Arguments &args)
     std::filesystem::remove(file, ignored);
   }
   const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
-  if (mode == vpHSlamParameters::modeSlam) {
-    throw vpHSlamException(vpHSlamException::unsupported,
-                           "--mode slam: loop closure is not implemented yet; use vo-strict or vo-reuse");
-  }
   params.system.mode = mode;
   if (!args.trackingMode.empty()) {
     params.tracking.mode = vpHSlamParameters::parseTrackingMode(args.trackingMode);

@@ -130,6 +130,8 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const Arg
       << "  \"reactivated_points_per_keyframe\": " << jsonNumber(s.reactivatedPointsPerKeyframe) << ",\n"
       << "  \"fused_points_per_keyframe\": " << jsonNumber(s.fusedPointsPerKeyframe) << ",\n"
       << "  \"window_share_from_global\": " << jsonNumber(s.windowShareFromGlobal) << ",\n"
+      << "  \"loop_candidates_verified\": " << s.loopCandidatesVerified << ",\n"
+      << "  \"loops_detected\": " << s.loopsDetected << ",\n"
       << "  \"descriptor_kb_per_keyframe\": " << jsonNumber(s.descriptorKbPerKeyframe) << ",\n"
       << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
       << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"

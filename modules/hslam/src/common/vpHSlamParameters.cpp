@@ -168,6 +168,15 @@ const Field kFields[] = {
   HSLAM_PARAM(globalMap, reuseRatio, openInterval(0., 1.), "re-use: best match below this * second best"),
   HSLAM_PARAM(globalMap, reuseMaxKeyframes, atLeast(1), "stored keyframes searched per new keyframe"),
   HSLAM_PARAM(globalMap, fusionSigmas, positive(), "late fusion: depths agree within this many sigmas"),
+  HSLAM_PARAM(globalMap, reuse, anyValue(), "re-use global points in the window (off: kept, not re-used)"),
+
+  HSLAM_PARAM(loop, consistency, atLeast(1), "consecutive keyframes agreeing on a loop candidate"),
+  HSLAM_PARAM(loop, minKeyframesBetween, atLeast(0), "keyframes after the start or the last loop first"),
+  HSLAM_PARAM(loop, matchMaxDistance, between(0, 256), "Hamming distance accepted at most for loop matches"),
+  HSLAM_PARAM(loop, matchRatio, openInterval(0., 1.), "loop matches: best below this * second best"),
+  HSLAM_PARAM(loop, minMatches, atLeast(3), "ORB matches needed to try a Sim(3)"),
+  HSLAM_PARAM(loop, minInliers, atLeast(3), "Sim(3) inliers needed to accept a loop"),
+  HSLAM_PARAM(loop, ransacThresholdPx, positive(), "Sim(3) inlier reprojection error, pixels"),
 
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),

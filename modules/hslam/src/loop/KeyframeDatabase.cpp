@@ -80,6 +80,17 @@ bool KeyframeDatabase::contains(KeyframeId id) const
   return m_vectors.count(id) > 0;
 }
 
+bool KeyframeDatabase::vectorOf(KeyframeId id, BowVector &bow) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  const auto it = m_vectors.find(id);
+  if (it == m_vectors.end()) {
+    return false;
+  }
+  bow = it->second;
+  return true;
+}
+
 std::vector<double> KeyframeDatabase::scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);

@@ -93,6 +93,9 @@ public:
   //! Candidates for \e bow, best first (see the class comment).
   std::vector<Candidate> query(const BowVector &bow, const Query &query) const;
 
+  //! The stored BoW vector of keyframe \e id; false when absent.
+  bool vectorOf(KeyframeId id, BowVector &bow) const;
+
   //! L1 scores of \e bow with each stored keyframe of \e ids (absent ids are skipped).
   std::vector<double> scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const;
 

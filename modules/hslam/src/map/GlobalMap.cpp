@@ -4,6 +4,7 @@
 #include "map/GlobalMap.h"
 
 #include <algorithm>
+#include <cstdlib>
 
 namespace hslam
 {
@@ -120,12 +121,12 @@ bool GlobalMap::applyCulling(int id)
       continue;
     }
     ++considered;
-    // Observers that were culled themselves no longer count (ORB-SLAM erases a culled keyframe's observations),
-    // which keeps culling from removing every keyframe of a well-observed stretch.
+    // Observers from the host's own window do not count (see GlobalMap.h); observers that were culled themselves
+    // no longer count either (ORB-SLAM erases a culled keyframe's observations).
     int observers = 0;
     for (int o : p.observers) {
       const GlobalKeyframe *other = find(o);
-      observers += (o != id && (!other || !other->culled)) ? 1 : 0;
+      observers += (std::abs(o - id) > m_options.windowSize && (!other || !other->culled)) ? 1 : 0;
     }
     redundant += observers >= m_options.cullMinObservers ? 1u : 0u;
   }

@@ -48,12 +48,14 @@ constexpr int kMinInitialPoints = 100;
 //! Seed of a keyframe's pixel selection: its frame id plus this fixed offset (any constant: runs stay reproducible).
 constexpr unsigned int kSelectionSeedOffset = 7919u;
 
-GlobalMap::Options globalMapOptions(const vpHSlamParameters::GlobalMap &g)
+GlobalMap::Options globalMapOptions(const vpHSlamParameters &params)
 {
+  const vpHSlamParameters::GlobalMap &g = params.globalMap;
   GlobalMap::Options o;
   o.covisibilityMinShared = g.covisibilityMinShared;
   o.cullObservedShare = g.cullObservedShare;
   o.cullMinObservers = g.cullMinObservers;
+  o.windowSize = params.mapper.windowSize;
   return o;
 }
 } // namespace
@@ -61,7 +63,7 @@ GlobalMap::Options globalMapOptions(const vpHSlamParameters::GlobalMap &g)
 LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
                          bool photometricCalibration, const OrbVocabulary *vocabulary)
     : m_impl(new Impl(params, K0, width, height, photometricCalibration, vocabulary)),
-      m_photometricCalibration(photometricCalibration), m_globalMap(globalMapOptions(params.globalMap))
+      m_photometricCalibration(photometricCalibration), m_globalMap(globalMapOptions(params))
 {
 }
 
@@ -224,6 +226,9 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
     }
     m.relocalization->addKeyframe(keyframeId, descriptors);
   }
+  if (m.params.system.mode == vpHSlamParameters::modeSlam) {
+    detectLoop(*kf);
+  }
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << keyframeId << " timing: trace " << t1 - t0 << " ms, activation "
                                               << t2 - t1 << " ms, rest " << threadCpuMs() - t2 << " ms");
 }
@@ -286,7 +291,7 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf)
   buildReferencePoints();
   dropPointsOutOfView(*kf);
   makeNewImmaturePoints(*kf);
-  if (keepsGlobalMap() && reuseGlobalPoints(*kf) > 0) {
+  if (keepsGlobalMap() && m.params.globalMap.reuse && reuseGlobalPoints(*kf) > 0) {
     buildReferencePoints(); // re-activated points are active in the newest keyframe: tracking uses them at once
   }
   const double t2 = threadCpuMs();

@@ -43,6 +43,7 @@ struct TwoViewInitialization;
 struct RelocalizationKeyframe;
 struct RelocalizationFrame;
 struct PairInformation;
+struct Sim3Estimate;
 
 class VISP_EXPORT LocalMapper
 {
@@ -126,6 +127,21 @@ public:
   //! True when marginalised keyframes are kept (system.mode is not vo-strict).
   bool keepsGlobalMap() const;
   const GlobalMap &globalMap() const { return m_globalMap; }
+  // ---- loops (system.mode slam)
+  //! A verified loop.
+  struct LoopRecord {
+    int keyframe = -1;            //!< the new keyframe that closed it
+    int candidate = -1;           //!< the stored keyframe it closed with
+    int inliers = 0;              //!< Sim(3) inliers
+    double scale = 1.;            //!< scale of the measured S_keyframe_candidate
+    double translationDrift = 0.; //!< |translation part of the correction| (map units)
+  };
+  struct LoopStatistics {
+    int candidatesVerified = 0;    //!< consistent candidates given to the Sim(3) verification
+    std::vector<LoopRecord> loops; //!< loops accepted
+  };
+  const LoopStatistics &loopStatistics() const { return m_loops; }
+
   //! Map points in world coordinates with their status: active window points and global ones (stored state).
   void mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const;
 
@@ -153,6 +169,10 @@ private:
   void storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs);
   //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
   int reuseGlobalPoints(Keyframe &newest);
+  //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.
+  bool detectLoop(const Keyframe &newest);
+  //! ORB matches between the window's points and the candidate's side, then the Sim(3) RANSAC.
+  Sim3Estimate verifyLoop(const Keyframe &newest, int candidate, int &matchCount) const;
   //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
   void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 
@@ -164,6 +184,7 @@ private:
   GlobalMap m_globalMap; //!< outlives segments (clear() keeps it)
   int m_segment = 0;     //!< segment of the keyframes being made
   ReuseStatistics m_reuse;
+  LoopStatistics m_loops;
 };
 } // namespace hslam
 

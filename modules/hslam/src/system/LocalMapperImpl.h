@@ -9,6 +9,7 @@
 #define HSLAM_SYSTEM_LOCAL_MAPPER_IMPL_H
 
 #include "features/SharedPointSelector.h"
+#include "loop/LoopDetector.h"
 #include "mapping/ImmaturePointTracer.h"
 #include "mapping/PointActivation.h"
 #include "mapping/WindowOptimizer.h"
@@ -27,7 +28,7 @@ struct LocalMapper::Impl {
       : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),
         selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect ||
                                  p.system.mode != vpHSlamParameters::modeVoStrict),
-        optimizer(p)
+        optimizer(p), loopConsistency(p.loop.consistency)
   {
     optimizer.setPhotometricallyCalibrated(calibrated);
     vocabulary = voc;
@@ -75,6 +76,8 @@ struct LocalMapper::Impl {
   int referenceKeyframe = -1;
   std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
   int keyframesInSegment = 0;
+  LoopConsistency loopConsistency;                          //!< candidate groups of the last loop queries
+  int keyframeOfLastLoop = 0;                               //!< keyframesInSegment when the last loop was accepted
   std::map<int, std::vector<PairInformation>> pendingPairs; //!< pose-pose links of the keyframes being marginalised
 };
 } // namespace hslam

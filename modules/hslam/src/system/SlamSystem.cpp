@@ -40,7 +40,9 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_initializer = std::make_unique<TwoViewInitializer>(m_params.initializer, m_preprocessor.intrinsics(), orbOptions);
   m_tracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
   m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
-  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect && m_params.tracking.relocalize) {
+  // The vocabulary: relocalisation (hybrid / indirect tracking) and loop detection (slam mode).
+  if ((m_params.tracking.mode != vpHSlamParameters::trackingDirect && m_params.tracking.relocalize) ||
+      m_params.system.mode == vpHSlamParameters::modeSlam) {
     const std::string path = vpHSlamVocabulary::defaultPath();
     if (path.empty()) {
       VP_HSLAM_LOG(vpHSlamLog::warning, "no vocabulary found (set HSLAM_VOCABULARY to a vocabulary file): "
@@ -349,8 +351,8 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   } else {
     m_consecutiveFailures = 0;
   }
-  if (finite && m_consecutiveFailures > m_params.system.maxTrackingFailures && m_vocabulary &&
-      m_mapper->indexesKeyframes()) {
+  if (finite && m_consecutiveFailures > m_params.system.maxTrackingFailures && m_vocabulary && m_hybrid &&
+      m_params.tracking.relocalize && m_mapper->indexesKeyframes()) {
     // The map stays: lost frames try relocalisation into it (frames until then are reported lost).
     m_runStats.addTrackingMs(nowMs() - t0);
     VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": tracking lost ("

@@ -209,6 +209,8 @@ private:
   double m_snapshotDescriptorKb = 0.;
   double m_snapshotMarginalizedMb = 0.;         //!< memory held for keyframes that left the window
   LocalMapper::ReuseStatistics m_snapshotReuse; //!< global map counters
+  int m_snapshotLoops = 0;                      //!< loops accepted (slam mode)
+  int m_snapshotLoopCandidates = 0;             //!< loop candidates verified
 };
 } // namespace hslam
 

@@ -169,6 +169,8 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
   m_snapshotMarginalizedMb = m_mapper->marginalizedMemoryBytes() / kBytesPerMegabyte;
   m_snapshotReuse = m_mapper->reuseStatistics();
+  m_snapshotLoops = static_cast<int>(m_mapper->loopStatistics().loops.size());
+  m_snapshotLoopCandidates = m_mapper->loopStatistics().candidatesVerified;
 }
 
 void SlamSystem::synchronize()

@@ -109,6 +109,8 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.globalPoints = static_cast<unsigned int>(r.storedPoints);
   s.reactivatedPointsPerKeyframe = r.keyframes > 0 ? static_cast<double>(r.reactivated) / r.keyframes : 0.;
   s.fusedPointsPerKeyframe = r.keyframes > 0 ? static_cast<double>(r.fused) / r.keyframes : 0.;
+  s.loopsDetected = static_cast<unsigned int>(m_snapshotLoops);
+  s.loopCandidatesVerified = static_cast<unsigned int>(m_snapshotLoopCandidates);
   s.windowShareFromGlobal = r.windowActive > 0 ? static_cast<double>(r.windowFromGlobal) / r.windowActive : 0.;
   s.orbMatchesMedian = t.orbMatchesMedian;
   s.orbInliersMedian = t.orbInliersMedian;

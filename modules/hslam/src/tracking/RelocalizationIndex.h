@@ -51,6 +51,8 @@ public:
   //! Keyframe ids best first, at most \e maxCandidates.
   std::vector<int> candidates(const BowVector &bow, int maxCandidates) const;
 
+  //! The keyframe database itself (loop detection queries it with its own rules).
+  const KeyframeDatabase &database() const { return m_database; }
   //! A culled keyframe leaves the database (no candidate any more) with its stored points.
   void removeKeyframe(int id);
   void clear();

@@ -139,6 +139,8 @@ public:
     double reactivatedPointsPerKeyframe = 0.;  //!< global points re-activated by early adoption, per keyframe
     double fusedPointsPerKeyframe = 0.;        //!< global points absorbed by late fusion, per keyframe
     double windowShareFromGlobal = 0.;         //!< share of the window's active points that came from the global map
+    unsigned int loopCandidatesVerified = 0;   //!< slam mode: consistent loop candidates given to the Sim(3) check
+    unsigned int loopsDetected = 0;            //!< slam mode: loops accepted by the Sim(3) check
   };
 
   /*!

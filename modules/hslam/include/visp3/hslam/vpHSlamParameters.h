@@ -159,14 +159,28 @@ public:
   */
   struct GlobalMap {
     int covisibilityMinShared = 15; //!< points two keyframes share to get a co-visibility edge (ORB-SLAM: 15)
-    double cullObservedShare =
-        0.9;                    //!< culling: share of a keyframe's points seen by cullMinObservers others (ORB-SLAM)
-    int cullMinObservers = 3;   //!< culling: other keyframes that must see a point (ORB-SLAM: 3)
-    double reuseRadiusPx = 10.; //!< search radius of a projected global point, pixels at 640 px width
-    int reuseMaxDistance = 50;  //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
-    double reuseRatio = 0.8;    //!< best distance below this times the second best (ORB-SLAM map search)
-    int reuseMaxKeyframes = 10; //!< stored keyframes searched per new keyframe (most overlapping first)
-    double fusionSigmas = 2.;   //!< late fusion: projected depth within this many standard deviations
+    double cullObservedShare = 0.9; //!< culling: share of points seen by cullMinObservers others (ORB-SLAM)
+    int cullMinObservers = 3;       //!< culling: keyframes from outside the window that see a point (ORB-SLAM: 3)
+    double reuseRadiusPx = 10.;     //!< search radius of a projected global point, pixels at 640 px width
+    int reuseMaxDistance = 50;      //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double reuseRatio = 0.8;        //!< best distance below this times the second best (ORB-SLAM map search)
+    int reuseMaxKeyframes = 10;     //!< stored keyframes searched per new keyframe (most overlapping first)
+    double fusionSigmas = 2.;       //!< late fusion: projected depth within this many standard deviations
+    bool reuse = true;              //!< re-use global points in the window (off: the map is kept, not re-used)
+  };
+
+  /*!
+    Loop detection and verification (system.mode = slam): bag-of-words candidates consistent over several
+    keyframes, ORB matching of the two sides' points, Sim(3) RANSAC (defaults: ORB-SLAM2's LoopClosing).
+  */
+  struct Loop {
+    int consistency = 3;              //!< consecutive keyframes whose candidates agree before a loop is verified
+    int minKeyframesBetween = 10;     //!< keyframes after the map's start (or the last loop) before detecting
+    int matchMaxDistance = 50;        //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double matchRatio = 0.75;         //!< best distance below this times the second best (ORB-SLAM loop search)
+    int minMatches = 20;              //!< ORB matches needed to try the Sim(3) (ORB-SLAM: 20)
+    int minInliers = 20;              //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
+    double ransacThresholdPx = 3.035; //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
   };
 
   //! System-wide behaviour.
@@ -184,18 +198,19 @@ public:
   Initializer initializer; //!< monocular initialisation
   Tracking tracking;       //!< hybrid tracking and relocalisation
   GlobalMap globalMap;     //!< global map re-use and connectivity graph
+  Loop loop;               //!< loop detection and verification
   System system;           //!< system-wide behaviour
 
   /*!
     Read settings from a YAML file written by save() (or by hand). Missing fields keep their values.
 
     Format (OpenCV FileStorage YAML, see data/hslam-default.yaml): line 1 is "%YAML:1.0"; one map per section
-    (features, tracker, mapper, initializer, tracking, globalMap, system) whose keys are the member names; booleans are
-    true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on their own line
-    (OpenCV's reader keeps an end-of-line comment inside an unquoted word). The whole file is checked before anything is
-    assigned: on error the object is unchanged. \exception vpHSlamException::fileNotFound, parseError (unknown section
-    or key, repeated key, wrong type, malformed YAML), invalidArgument (value out of range), naming the file and the
-    key.
+    (features, tracker, mapper, initializer, tracking, globalMap, loop, system) whose keys are the member names;
+    booleans are true/false, the modes are their modeName() / trackingModeName(), vectors are [ 1, 2 ]. Comments go on
+    their own line (OpenCV's reader keeps an end-of-line comment inside an unquoted word). The whole file is checked
+    before anything is assigned: on error the object is unchanged. \exception vpHSlamException::fileNotFound, parseError
+    (unknown section or key, repeated key, wrong type, malformed YAML), invalidArgument (value out of range), naming the
+    file and the key.
   */
   void load(const std::string &path);
   //! Write every setting to a YAML file. \exception vpHSlamException::fileUnreadable when it cannot be written.
