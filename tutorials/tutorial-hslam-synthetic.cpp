@@ -16,7 +16,7 @@ namespace
 void usage(const char *program)
 {
   std::cout << "Usage: " << program
-            << " --output DIR [--frames N] [--laps N] [--seed S] [--width W --height H] [--fps F]\n"
+            << " --output DIR [--frames N] [--laps N] [--look-outward] [--seed S] [--width W --height H] [--fps F]\n"
                "       [--vignette] [--response] [--exposure-changes] [--noise SIGMA] [--motion-blur] [--help]\n\n"
                "Renders a textured room (photographs from visp-images-data) seen by a hand-held-like camera\n"
                "that loops back to its start, and writes DIR/rgb/NNNNNN.png, rgb.txt, groundtruth.txt (wMc, TUM),\n"
@@ -26,6 +26,7 @@ void usage(const char *program)
                "  --frames N          frame count, default 300 (the last frame has the pose of the first)\n"
                "  --seed S            trajectory phases and noise, default 1\n"
                "  --laps N            drive the loop N times (default 1; N should divide frames - 1)\n"
+               "  --look-outward      film the walls in turn, a full turn per lap (needs 400 frames a lap or more)\n"
                "  --width W           image width, default 640\n"
                "  --height H          image height, default 480\n"
                "  --fps F             frame rate, default 30\n"
@@ -59,6 +60,7 @@ int main(int argc, char **argv)
 {
   std::string output;
   unsigned int frames = 300, seed = 1, width = 640, height = 480, laps = 1;
+  bool lookOutward = false;
   double fps = 30.0;
   vpHSlamSyntheticScene::Effects effects;
   for (int k = 1; k < argc; ++k) {
@@ -74,6 +76,8 @@ int main(int argc, char **argv)
       ok = parseUnsigned(argv[++k], frames);
     } else if (arg == "--laps" && hasValue) {
       ok = parseUnsigned(argv[++k], laps) && laps > 0;
+    } else if (arg == "--look-outward") {
+      lookOutward = true;
     } else if (arg == "--seed" && hasValue) {
       ok = parseUnsigned(argv[++k], seed);
     } else if (arg == "--width" && hasValue) {
@@ -111,6 +115,7 @@ int main(int argc, char **argv)
   try {
     vpHSlamSyntheticScene scene;
     scene.setLaps(laps);
+    scene.setLookOutward(lookOutward);
     scene.configure(width, height, frames, fps, seed, effects);
     std::cout << "Synthetic room: " << width << "x" << height << ", " << frames << " frames at " << fps << " Hz, seed "
               << seed << "\nTextures:\n";

@@ -156,3 +156,22 @@ TEST(SystemParts, TrajectoryFollowsKeyframeCorrections)
   hslam_test::expectHSlamError([&]() { recorder.addKeyframe(5, 3, 0.3, wMk0, 0); }, vpHSlamException::invalidArgument,
                                {"keyframe id 5"});
 }
+
+TEST(SystemParts, TrajectoryFollowsALoopCorrectionWithScale)
+{
+  // A loop correction moves keyframe 0 and divides its map by 2: a frame 0.5 m in front of it ends 0.25 m in front
+  // of its new pose; frames on other keyframes do not move.
+  hslam::TrajectoryRecorder recorder;
+  recorder.addKeyframe(0, 0, 0., hslam::SE3d(), 0);
+  recorder.addKeyframe(1, 5, 0.5, hslam::SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(3., 0., 0.)), 0);
+  recorder.addFrame(1, 0.1, 0, hslam::SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0., 0., 0.5)), 0);
+  recorder.addFrame(6, 0.6, 1, hslam::SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0., 0., 0.5)), 0);
+  const hslam::SE3d wMk0(Eigen::Quaterniond::Identity(), Eigen::Vector3d(1., 0., 0.));
+  recorder.correctKeyframes({0}, {wMk0}, {2.});
+  hslam::SE3d w1, w6;
+  ASSERT_TRUE(recorder.framePose(1, w1));
+  ASSERT_TRUE(recorder.framePose(6, w6));
+  EXPECT_NEAR((w1.translation() - Eigen::Vector3d(1., 0., 0.25)).norm(), 0., 1e-12);
+  EXPECT_NEAR((w6.translation() - Eigen::Vector3d(3., 0., 0.5)).norm(), 0., 1e-12);
+  EXPECT_NEAR((recorder.keyframePose(0).translation() - Eigen::Vector3d(1., 0., 0.)).norm(), 0., 1e-12);
+}

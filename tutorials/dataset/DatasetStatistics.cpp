@@ -132,6 +132,8 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const Arg
       << "  \"window_share_from_global\": " << jsonNumber(s.windowShareFromGlobal) << ",\n"
       << "  \"loop_candidates_verified\": " << s.loopCandidatesVerified << ",\n"
       << "  \"loops_detected\": " << s.loopsDetected << ",\n"
+      << "  \"loops_corrected\": " << s.loopsCorrected << ",\n"
+      << "  \"last_loop_correction_ms\": " << jsonNumber(s.lastLoopCorrectionMs) << ",\n"
       << "  \"descriptor_kb_per_keyframe\": " << jsonNumber(s.descriptorKbPerKeyframe) << ",\n"
       << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
       << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"

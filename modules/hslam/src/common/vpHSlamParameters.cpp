@@ -177,6 +177,7 @@ const Field kFields[] = {
   HSLAM_PARAM(loop, minMatches, atLeast(3), "ORB matches needed to try a Sim(3)"),
   HSLAM_PARAM(loop, minInliers, atLeast(3), "Sim(3) inliers needed to accept a loop"),
   HSLAM_PARAM(loop, ransacThresholdPx, positive(), "Sim(3) inlier reprojection error, pixels"),
+  HSLAM_PARAM(loop, maxRotationCorrectionDeg, between(0., 180.), "loops rotating the map more are refused, deg"),
 
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),

@@ -21,6 +21,9 @@ struct RelativeSim3Error {
   explicit RelativeSim3Error(const PoseGraphEdge &e) : Sji(e.Sji), W(e.sqrtInformation) {}
   template <typename T> bool operator()(const T *xi, const T *xj, T *residual) const
   {
+    if (!sim3ParametersValid(xi) || !sim3ParametersValid(xj)) {
+      return false;
+    }
     // log(S_ji_measured S_iw S_jw^-1): identity when the estimates agree with the measurement.
     const Sim3<T> Siw = sim3FromParameters(xi);
     const Sim3<T> Sjw = sim3FromParameters(xj);
@@ -110,6 +113,9 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations)
   std::map<int, Vertex> backup = m_vertices;
   ceres::Solve(options, &problem, &summary);
   out.usable = summary.IsSolutionUsable();
+  for (const auto &entry : m_vertices) {
+    out.usable = out.usable && sim3ParametersValid(entry.second.x.data());
+  }
   if (!out.usable) {
     m_vertices.swap(backup);
   }

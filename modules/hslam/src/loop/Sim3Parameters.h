@@ -52,16 +52,51 @@ inline std::array<double, kSim3ParameterSize> sim3Parameters(const Sim3<double> 
   return x;
 }
 
+//! |log-scale| above this is no similarity a map can have (scale beyond e^+-20): evaluation is refused.
+constexpr double kMaxAbsLogScale = 20.;
+
+//! True when all n entries are finite; functors refuse to evaluate otherwise.
+template <typename T> bool allFinite(const T *x, int n)
+{
+  using std::isfinite;
+  for (int i = 0; i < n; ++i) {
+    if (!isfinite(x[i])) {
+      return false;
+    }
+  }
+  return true;
+}
+
+//! Finite parameters with a usable scale (Sim3's constructor would throw on a scale that underflows to 0).
+template <typename T> bool sim3ParametersValid(const T *x)
+{
+  return allFinite(x, kSim3ParameterSize) && x[7] < T(kMaxAbsLogScale) && x[7] > T(-kMaxAbsLogScale);
+}
+
 //! Left-multiplicative update on Sim(3) (see file comment).
 struct Sim3LeftPlus {
   template <typename T> bool Plus(const T *x, const T *delta, T *out) const
   {
-    const Eigen::Map<const Eigen::Matrix<T, 7, 1>> d(delta);
-    sim3ToParameters(Sim3<T>::exp(typename Sim3<T>::Tangent(d)) * sim3FromParameters(x), out);
+    if (!sim3ParametersValid(x) || !allFinite(delta, kSim3TangentSize)) {
+      return false;
+    }
+    // The log-scale step saturates (Ceres also adds the raw gradient for its convergence test): a scale that
+    // over- or underflows would not be a similarity.
+    typename Sim3<T>::Tangent d(Eigen::Map<const Eigen::Matrix<T, 7, 1>>(delta).eval());
+    const T logScale = d(6) + x[7];
+    if (logScale > T(kMaxAbsLogScale)) {
+      d(6) = T(kMaxAbsLogScale) - x[7];
+    } else if (logScale < T(-kMaxAbsLogScale)) {
+      d(6) = T(-kMaxAbsLogScale) - x[7];
+    }
+    sim3ToParameters(Sim3<T>::exp(d) * sim3FromParameters(x), out);
     return true;
   }
   template <typename T> bool Minus(const T *y, const T *x, T *out) const
   {
+    if (!sim3ParametersValid(x) || !sim3ParametersValid(y)) {
+      return false;
+    }
     Eigen::Map<Eigen::Matrix<T, 7, 1>> result(out);
     result = (sim3FromParameters(y) * sim3FromParameters(x).inverse()).log();
     return true;

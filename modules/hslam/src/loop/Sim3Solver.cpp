@@ -70,6 +70,9 @@ struct TwoWayReprojection {
   }
   template <typename T> bool operator()(const T *x, T *r) const
   {
+    if (!sim3ParametersValid(x)) {
+      return false;
+    }
     const Sim3<T> S21 = sim3FromParameters(x);
     T u2, v2, u1, v1;
     if (!project(K2, Eigen::Matrix<T, 3, 1>(S21 * Eigen::Matrix<T, 3, 1>(m.X1.cast<T>())), u2, v2) ||
@@ -156,7 +159,7 @@ bool refineSim3(const std::vector<Sim3Correspondence> &matches, const PinholeInt
   options.logging_type = ceres::SILENT;
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  if (!summary.IsSolutionUsable() || !std::isfinite(x[7])) {
+  if (!summary.IsSolutionUsable() || !sim3ParametersValid(x.data())) {
     return false;
   }
   S21 = sim3FromParameters(x.data());

@@ -31,7 +31,6 @@
 
 namespace hslam
 {
-using Sim3d = Sim3<double>;
 
 //! One 3D-3D match: the same map point seen by keyframe 1 and keyframe 2.
 struct Sim3Correspondence {

@@ -1,11 +1,14 @@
 #include "sim/SyntheticTrajectory.h"
 
+#include <visp3/hslam/vpHSlamException.h>
+
 #include <visp3/core/vpRotationMatrix.h>
 #include <visp3/core/vpTranslationVector.h>
 
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 namespace hslam
 {
@@ -61,9 +64,18 @@ void mul3(const double A[9], const double B[9], double C[9])
 } // namespace
 
 SyntheticTrajectory::SyntheticTrajectory(unsigned int frameCount, unsigned int seed, double maxStepMetres,
-                                         double maxStepRadians, unsigned int laps)
-    : m_period(static_cast<double>(frameCount > 1 ? frameCount - 1 : 1) / std::max(1u, laps))
+                                         double maxStepRadians, unsigned int laps, bool lookOutward)
+    : m_period(static_cast<double>(frameCount > 1 ? frameCount - 1 : 1) / std::max(1u, laps)),
+      m_lookOutward(lookOutward)
 {
+  // Looking outward, yaw turns 2 pi per lap on top of the (small) sinusoids.
+  const double turnPerFrame = lookOutward ? kTwoPi / m_period : 0.0;
+  if (turnPerFrame > maxStepRadians) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "synthetic trajectory: looking outward, a lap must take at least " +
+                               std::to_string(static_cast<int>(std::ceil(kTwoPi / maxStepRadians))) + " frames (got " +
+                               std::to_string(m_period) + ")");
+  }
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> phase(0.0, kTwoPi);
   for (int a = 0; a < 3; ++a) {
@@ -90,15 +102,22 @@ SyntheticTrajectory::SyntheticTrajectory(unsigned int frameCount, unsigned int s
   }
   const double posBound = std::sqrt(posBound2);
   const double posScale = posBound > maxStepMetres ? maxStepMetres / posBound : 1.0;
-  const double angScale = angBound > maxStepRadians ? maxStepRadians / angBound : 1.0;
+  if (lookOutward) {
+    angBound -= kAngShape[0][0] * omega; // no pan across the front wall: the yaw fundamental is the full turn
+  }
+  const double angBudget = maxStepRadians - turnPerFrame;
+  const double angScale = angBound > angBudget ? angBudget / angBound : 1.0;
   for (int a = 0; a < 3; ++a) {
     for (int k = 0; k < kHarmonics; ++k) {
       m_posAmp[a][k] = kPosShape[a][k] * posScale;
       m_angAmp[a][k] = kAngShape[a][k] * angScale;
     }
   }
+  if (lookOutward) {
+    m_angAmp[0][0] = 0.0;
+  }
   m_stepBoundMetres = posBound * posScale;
-  m_stepBoundRadians = angBound * angScale;
+  m_stepBoundRadians = angBound * angScale + turnPerFrame;
 }
 
 SimPose SyntheticTrajectory::pose(double frame) const
@@ -115,6 +134,10 @@ SimPose SyntheticTrajectory::pose(double frame) const
     }
     P.wtc[a] = kCentre[a] + p;
     ang[a] = q;
+  }
+  if (m_lookOutward) {
+    // Forward (the camera's z) along the horizontal offset from the centre: x ~ sin(theta + phase), z ~ cos(...).
+    ang[0] += theta + m_posPhase[0][0];
   }
   double Ry[9], Rx[9], Rz[9], Ryx[9];
   rotY(ang[0], Ry);

@@ -36,9 +36,14 @@ public:
     \param maxStepMetres, maxStepRadians : bounds on the motion between consecutive frames.
     \param laps : times the loop is driven (>= 1); the period is (frameCount - 1) / laps frames, so with laps
     dividing frameCount - 1 every lap starts exactly at the pose of frame 0.
+    \param lookOutward : false (default): the camera pans across the front wall; true: it looks away from the
+    centre of its loop, turning a full circle per lap, so it films the four walls in turn and what it saw first
+    leaves the view (a loop that a sliding window cannot close by itself). The full turn cannot be scaled down:
+    a lap must then take at least 2 pi / maxStepRadians frames.
+    \exception vpHSlamException::invalidArgument when a lap is too short for lookOutward.
   */
   SyntheticTrajectory(unsigned int frameCount, unsigned int seed, double maxStepMetres, double maxStepRadians,
-                      unsigned int laps = 1);
+                      unsigned int laps = 1, bool lookOutward = false);
 
   //! Pose at a (possibly fractional) frame index; integer indices are exactly periodic.
   SimPose pose(double frame) const;
@@ -51,6 +56,7 @@ public:
 
 private:
   double m_period; //!< loop period in frames ((frameCount - 1) / laps)
+  bool m_lookOutward = false;
   double m_posAmp[3][kHarmonics], m_posPhase[3][kHarmonics];
   double m_angAmp[3][kHarmonics], m_angPhase[3][kHarmonics];
   double m_stepBoundMetres, m_stepBoundRadians;

@@ -107,7 +107,8 @@ void vpHSlamSyntheticScene::configure(unsigned int width, unsigned int height, u
   m_fps = fps;
   m_seed = seed;
   m_effects = effects;
-  m_trajectory.reset(new hslam::SyntheticTrajectory(frames, seed, kMaxStepMetres, kMaxStepRadians, m_laps));
+  m_trajectory.reset(
+      new hslam::SyntheticTrajectory(frames, seed, kMaxStepMetres, kMaxStepRadians, m_laps, m_lookOutward));
 
   m_vignette.clear();
   if (effects.vignette) {

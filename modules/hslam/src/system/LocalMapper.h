@@ -28,6 +28,7 @@
 #include "map/GlobalMap.h"
 #include "map/Keyframe.h"
 #include "math/SE3.h"
+#include "math/Sim3.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
@@ -54,6 +55,7 @@ public:
     SE3d wMc;
     bool inWindow = true;
     unsigned int activePoints = 0;
+    double scale = 1.; //!< loop correction: the keyframe's map was divided by this (frames tracked on it follow)
   };
 
   /*!
@@ -139,6 +141,9 @@ public:
   struct LoopStatistics {
     int candidatesVerified = 0;    //!< consistent candidates given to the Sim(3) verification
     std::vector<LoopRecord> loops; //!< loops accepted
+    int corrected = 0;             //!< loops whose pose-graph correction was applied
+    int refusedImplausible = 0;    //!< verified loops refused for a rotation correction above the limit
+    double lastCorrectionMs = 0.;  //!< wall time of the last correction (graph, optimisation, map update)
   };
   const LoopStatistics &loopStatistics() const { return m_loops; }
 
@@ -173,6 +178,13 @@ private:
   bool detectLoop(const Keyframe &newest);
   //! ORB matches between the window's points and the candidate's side, then the Sim(3) RANSAC.
   Sim3Estimate verifyLoop(const Keyframe &newest, int candidate, int &matchCount) const;
+  /*!
+    Correct the stored keyframes of the segment after a loop: Sim(3) pose graph (window keyframes fixed; pose-pose,
+    strong co-visibility and every loop edge so far), then every stored keyframe's pose and its points' inverse depths
+    (the map follows its host), the relocalisation index and the reported trajectory. Returns false when the
+    optimisation failed (nothing changed).
+  */
+  bool correctLoop(const Keyframe &newest, int candidate);
   //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
   void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 
@@ -185,6 +197,11 @@ private:
   int m_segment = 0;     //!< segment of the keyframes being made
   ReuseStatistics m_reuse;
   LoopStatistics m_loops;
+  struct LoopEdge {
+    int candidate = -1, keyframe = -1;
+    Sim3d SkeyframeCandidate; //!< measured by the Sim(3) verification
+  };
+  std::vector<LoopEdge> m_loopEdges; //!< every accepted loop, kept for the next corrections
 };
 } // namespace hslam
 

@@ -9,11 +9,14 @@
 #include "system/LocalMapperImpl.h"
 
 #include "loop/LoopDetector.h"
+#include "loop/PoseGraph.h"
 #include "loop/Sim3Solver.h"
 
+#include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <algorithm>
+#include <chrono>
 #include <set>
 
 namespace hslam
@@ -22,6 +25,10 @@ namespace
 {
 //! Stored neighbours of the candidate whose points join its side of the match (ORB-SLAM: the connected keyframes).
 constexpr size_t kCandidateNeighbours = 5;
+//! Co-visibility edges of the pose graph: only strong ones (ORB-SLAM's essential graph: 100 shared points).
+constexpr int kEssentialCovisibility = 100;
+//! Levenberg-Marquardt iterations of the loop's pose graph (ORB-SLAM: 20).
+constexpr int kLoopGraphIterations = 20;
 
 bool projectPoint(const PinholeIntrinsics &K, const Eigen::Vector3d &X, Eigen::Vector2d &uv)
 {
@@ -58,6 +65,13 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     for (int c : m_globalMap.covisibleWith(kf->id())) {
       connected.insert(c);
     }
+    // Keyframes whose points the window re-uses now are connected too (their co-visibility is only counted
+    // once those points leave the window again): after a loop, re-use links the two sides at once.
+    for (const MapPoint &pt : kf->points) {
+      if (pt.status == PointStatus::active && pt.fromGlobalMap) {
+        connected.insert(pt.observers.begin(), pt.observers.end());
+      }
+    }
   }
   const std::vector<double> scores = database.scoresWith(bow, neighbours);
   if (scores.empty()) {
@@ -85,7 +99,14 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
   for (int candidate : accepted) {
     ++m_loops.candidatesVerified;
     int matches = 0;
-    const Sim3Estimate estimate = verifyLoop(newest, candidate, matches);
+    Sim3Estimate estimate;
+    try {
+      estimate = verifyLoop(newest, candidate, matches);
+    } catch (const vpHSlamException &e) { // a degenerate configuration: this candidate is not a loop
+      VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << newest.id() << ": loop candidate " << candidate
+                                                    << " could not be verified: " << e.getStringMessage());
+      continue;
+    }
     VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop candidate " << candidate << ", " << matches
                                                << " ORB matches, " << estimate.inlierCount << " Sim(3) inliers"
                                                << (estimate.success ? " (accepted)" : " (rejected)"));
@@ -97,6 +118,16 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     const GlobalKeyframe *c = m_globalMap.find(candidate);
     const Sim3d current(newest.frame->cMw * c->cMw.inverse(), 1.);
     const Sim3d::Tangent drift = (estimate.S21 * current.inverse()).log();
+    const double rotationDeg = drift.segment<3>(3).norm() * 180. / M_PI;
+    if (rotationDeg > p.maxRotationCorrectionDeg) {
+      // Odometry drifts a few degrees in rotation, not tens: a correction that large is a place that looks like
+      // another (a repeated texture, two alike doors), however consistent its geometry.
+      VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop with keyframe " << candidate
+                                                 << " refused: it would rotate the map by " << rotationDeg
+                                                 << " degrees");
+      ++m_loops.refusedImplausible;
+      continue;
+    }
     LoopRecord record;
     record.keyframe = newest.id();
     record.candidate = candidate;
@@ -106,9 +137,19 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     m_loops.loops.push_back(record);
     m.keyframeOfLastLoop = m.keyframesInSegment;
     m.loopConsistency.clear();
+    m_loopEdges.push_back({candidate, newest.id(), estimate.S21});
+    bool corrected = false;
+    try {
+      corrected = correctLoop(newest, candidate);
+    } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
+      VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << newest.id() << ": loop with keyframe " << candidate
+                                                    << " not corrected: " << e.getStringMessage());
+    }
+    m_loops.corrected += corrected ? 1 : 0;
     VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop with keyframe " << candidate << " ("
                                                << estimate.inlierCount << " inliers, scale " << record.scale
-                                               << ", translation correction " << record.translationDrift << ")");
+                                               << ", translation correction " << record.translationDrift
+                                               << ", rotation correction " << rotationDeg << " degrees)");
     return true;
   }
   return false;
@@ -187,5 +228,135 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
   options.maxReprojectionPx = p.ransacThresholdPx;
   options.seed = static_cast<unsigned int>(newest.id());
   return estimateSim3Ransac(correspondences, K, K, options);
+}
+
+bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
+{
+  Impl &m = *m_impl;
+  const auto t0 = std::chrono::steady_clock::now();
+  PoseGraph graph;
+  std::set<int> window;
+  for (const KeyframePtr &kf : m_window) {
+    graph.addVertex(kf->id(), Sim3d(kf->frame->cMw, 1.), true); // the window's priors tie it: never moved
+    window.insert(kf->id());
+  }
+  std::vector<int> stored;
+  for (const auto &entry : m_globalMap.keyframes()) {
+    if (entry.second.segment == m_segment && !window.count(entry.first)) {
+      graph.addVertex(entry.first, Sim3d(entry.second.cMw, 1.), false);
+      stored.push_back(entry.first);
+    }
+  }
+  auto inGraph = [&](int id) {
+    const GlobalKeyframe *g = m_globalMap.find(id);
+    return window.count(id) > 0 || (g && g->segment == m_segment);
+  };
+  auto linksStored = [&](int a, int b) { return inGraph(a) && inGraph(b) && !(window.count(a) && window.count(b)); };
+  // Edges weighted alike, as ORB-SLAM's essential graph: the window's photometric information is far larger
+  // than what a loop edge can be given, and would pin the old side.
+  for (const PosePoseEdge &e : m_globalMap.posePoseEdges()) {
+    if (linksStored(e.from, e.to)) {
+      PoseGraphEdge g;
+      g.i = e.from;
+      g.j = e.to;
+      g.Sji = Sim3d(e.toMfrom, 1.);
+      graph.addEdge(g);
+    }
+  }
+  for (const CovisibilityEdge &e : m_globalMap.covisibilityEdges()) {
+    if (e.weight >= kEssentialCovisibility && linksStored(e.a, e.b)) {
+      graph.addEdgeFromCurrent(e.a, e.b);
+    }
+  }
+  for (const LoopEdge &loop : m_loopEdges) {
+    if (inGraph(loop.candidate) && inGraph(loop.keyframe)) {
+      PoseGraphEdge g;
+      g.i = loop.candidate;
+      g.j = loop.keyframe;
+      g.Sji = loop.SkeyframeCandidate;
+      graph.addEdge(g);
+    }
+  }
+  // The new loop joins both neighbourhoods (ORB-SLAM's loop connections): every window keyframe to the candidate
+  // and its best co-visible stored keyframes, through the measured similarity and each side's current relative
+  // poses, so that one edge does not have to bend the whole chain alone.
+  const GlobalKeyframe *c = m_globalMap.find(candidate);
+  std::vector<int> candidateSide = {candidate};
+  for (int n : m_globalMap.covisibleWith(candidate)) {
+    if (candidateSide.size() <= kCandidateNeighbours && inGraph(n) && !window.count(n)) {
+      candidateSide.push_back(n);
+    }
+  }
+  const Sim3d SnewCandidate = m_loopEdges.back().SkeyframeCandidate;
+  for (const KeyframePtr &w : m_window) {
+    const Sim3d SwNew(w->frame->cMw * newest.frame->cMw.inverse(), 1.);
+    for (int n : candidateSide) {
+      const GlobalKeyframe *g = m_globalMap.find(n);
+      if (!g || (w->id() == newest.id() && n == candidate)) {
+        continue; // the measured edge itself is already in
+      }
+      PoseGraphEdge e;
+      e.i = n;
+      e.j = w->id();
+      e.Sji = SwNew * SnewCandidate * Sim3d(c->cMw * g->cMw.inverse(), 1.);
+      graph.addEdge(e);
+    }
+  }
+  const PoseGraphSummary summary = graph.optimize(kLoopGraphIterations);
+  if (!summary.usable) {
+    VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << newest.id() << ": loop with keyframe " << candidate
+                                                  << " not corrected (pose graph failed)");
+    return false;
+  }
+  // The map follows its hosts: a keyframe's new pose is the rigid part of its similarity, and its points' inverse
+  // depths are multiplied by the scale (X_camera' = X_camera / s); frames tracked against it follow (scale).
+  std::vector<Sim3d> solution; // read (and checked) before anything changes
+  for (int id : stored) {
+    solution.push_back(graph.vertex(id));
+    if (!solution.back().translation().allFinite() || !(solution.back().scale() > 0.)) {
+      VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << newest.id() << ": loop not corrected (non-finite solution)");
+      return false;
+    }
+  }
+  for (size_t k = 0; k < stored.size(); ++k) {
+    const int id = stored[k];
+    GlobalKeyframe *g = m_globalMap.find(id);
+    const Sim3d &S = solution[k];
+    const double s = S.scale();
+    g->cMw = SE3d(S.unitQuaternion(), S.translation() / s);
+    for (GlobalPoint &p : g->points) {
+      p.idepth = static_cast<float>(p.idepth * s);
+      p.idepthVar = static_cast<float>(p.idepthVar * s * s);
+    }
+    KeyframeState state;
+    state.id = id;
+    state.wMc = g->cMw.inverse();
+    state.inWindow = false;
+    state.scale = s;
+    m.marginalizedStates.push_back(state);
+    if (m.relocalization) {
+      RelocalizationKeyframe points;
+      if (m.relocalization->keyframePoints(id, points)) {
+        points.wX.clear();
+        points.descriptors.clear();
+        const PinholeIntrinsics &K = m.K0;
+        for (const GlobalPoint &p : g->points) {
+          if (p.hasOrb && p.isCorner && p.idepth > 0.f) {
+            const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
+            points.wX.push_back(state.wMc * (ray / static_cast<double>(p.idepth)));
+            points.descriptors.push_back(p.orb);
+          }
+        }
+        m.relocalization->setKeyframePoints(id, std::move(points.wX), std::move(points.descriptors));
+      }
+    }
+  }
+  m_loops.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop corrected, " << stored.size()
+                                             << " stored keyframes moved (pose graph " << graph.vertexCount()
+                                             << " vertices, " << graph.edgeCount() << " edges, " << summary.iterations
+                                             << " iterations, cost " << summary.initialCost << " -> "
+                                             << summary.finalCost << "), " << m_loops.lastCorrectionMs << " ms");
+  return true;
 }
 } // namespace hslam

@@ -211,6 +211,8 @@ private:
   LocalMapper::ReuseStatistics m_snapshotReuse; //!< global map counters
   int m_snapshotLoops = 0;                      //!< loops accepted (slam mode)
   int m_snapshotLoopCandidates = 0;             //!< loop candidates verified
+  int m_snapshotLoopsCorrected = 0;             //!< loops corrected
+  double m_snapshotLoopMs = 0.;                 //!< last correction, ms
 };
 } // namespace hslam
 

@@ -143,9 +143,21 @@ void SlamSystem::publishAfterKeyframe()
 {
   std::vector<LocalMapper::KeyframeState> states;
   m_mapper->takeKeyframeStates(states);
+  std::vector<int> correctedIds;
+  std::vector<SE3d> correctedPoses;
+  std::vector<double> correctedScales;
   for (const LocalMapper::KeyframeState &k : states) {
-    m_recorder.updateKeyframe(k.id, k.wMc);
+    if (k.scale != 1.) { // a loop correction scaled this keyframe's map: its frames follow
+      correctedIds.push_back(k.id);
+      correctedPoses.push_back(k.wMc);
+      correctedScales.push_back(k.scale);
+    } else {
+      m_recorder.updateKeyframe(k.id, k.wMc);
+    }
     m_recorder.setKeyframeInWindow(k.id, k.inWindow, k.activePoints);
+  }
+  if (!correctedIds.empty()) {
+    m_recorder.correctKeyframes(correctedIds, correctedPoses, correctedScales);
   }
   {
     std::lock_guard<std::mutex> lock(m_referenceMutex);
@@ -171,6 +183,8 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotReuse = m_mapper->reuseStatistics();
   m_snapshotLoops = static_cast<int>(m_mapper->loopStatistics().loops.size());
   m_snapshotLoopCandidates = m_mapper->loopStatistics().candidatesVerified;
+  m_snapshotLoopsCorrected = m_mapper->loopStatistics().corrected;
+  m_snapshotLoopMs = m_mapper->loopStatistics().lastCorrectionMs;
 }
 
 void SlamSystem::synchronize()

@@ -111,6 +111,8 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.fusedPointsPerKeyframe = r.keyframes > 0 ? static_cast<double>(r.fused) / r.keyframes : 0.;
   s.loopsDetected = static_cast<unsigned int>(m_snapshotLoops);
   s.loopCandidatesVerified = static_cast<unsigned int>(m_snapshotLoopCandidates);
+  s.loopsCorrected = static_cast<unsigned int>(m_snapshotLoopsCorrected);
+  s.lastLoopCorrectionMs = m_snapshotLoopMs;
   s.windowShareFromGlobal = r.windowActive > 0 ? static_cast<double>(r.windowFromGlobal) / r.windowActive : 0.;
   s.orbMatchesMedian = t.orbMatchesMedian;
   s.orbInliersMedian = t.orbInliersMedian;

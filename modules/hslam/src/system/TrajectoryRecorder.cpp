@@ -37,6 +37,26 @@ void TrajectoryRecorder::updateKeyframe(int keyframeId, const SE3d &wMc)
   }
 }
 
+void TrajectoryRecorder::correctKeyframes(const std::vector<int> &ids, const std::vector<SE3d> &wMc,
+                                          const std::vector<double> &scale)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  std::vector<double> factor(m_keyframes.size(), 1.);
+  for (size_t i = 0; i < ids.size() && i < wMc.size() && i < scale.size(); ++i) {
+    if (ids[i] >= 0 && ids[i] < static_cast<int>(m_keyframes.size()) && scale[i] > 0.) {
+      m_keyframes[static_cast<size_t>(ids[i])].wMc = wMc[i];
+      factor[static_cast<size_t>(ids[i])] = scale[i];
+    }
+  }
+  for (FrameRecord &f : m_frames) {
+    if (f.referenceKeyframe >= 0 && f.referenceKeyframe < static_cast<int>(factor.size()) &&
+        factor[static_cast<size_t>(f.referenceKeyframe)] != 1.) {
+      f.refMc =
+          SE3d(f.refMc.unitQuaternion(), f.refMc.translation() / factor[static_cast<size_t>(f.referenceKeyframe)]);
+    }
+  }
+}
+
 void TrajectoryRecorder::setKeyframeInWindow(int keyframeId, bool inWindow, unsigned int activePoints)
 {
   std::lock_guard<std::mutex> lock(m_mutex);

@@ -60,6 +60,11 @@ public:
   void updateKeyframe(int keyframeId, const SE3d &wMc);
   void setKeyframeInWindow(int keyframeId, bool inWindow, unsigned int activePoints);
   /*!
+    Loop correction of keyframes whose map was scaled: each keyframe id gets its new pose, and the frames tracked
+    against it have their translation to it divided by its scale factor (their map shrank or grew with it).
+  */
+  void correctKeyframes(const std::vector<int> &ids, const std::vector<SE3d> &wMc, const std::vector<double> &scale);
+  /*!
     Record a frame's pose relative to a recorded keyframe. Frames are kept in the order they are added; adding a
     frame index already recorded replaces its record (a frame that becomes a keyframe is re-anchored to itself).
   */

@@ -141,6 +141,8 @@ public:
     double windowShareFromGlobal = 0.;         //!< share of the window's active points that came from the global map
     unsigned int loopCandidatesVerified = 0;   //!< slam mode: consistent loop candidates given to the Sim(3) check
     unsigned int loopsDetected = 0;            //!< slam mode: loops accepted by the Sim(3) check
+    unsigned int loopsCorrected = 0;           //!< slam mode: loops whose pose-graph correction was applied
+    double lastLoopCorrectionMs = 0.;          //!< slam mode: wall time of the last correction, milliseconds
   };
 
   /*!

@@ -46,7 +46,7 @@ public:
   enum Mode {
     modeVoStrict, //!< window only, marginalised points discarded (DSO-like)
     modeVoReuse,  //!< global points re-used, no loop closure
-    modeSlam      //!< everything (default once loop closure exists)
+    modeSlam      //!< vo-reuse + loop detection, Sim(3) verification, pose-graph correction (no global BA yet)
   };
 
   //! Which errors the pose of a new frame minimises (paper section 3.2; the ablations of section 4).
@@ -174,18 +174,19 @@ public:
     keyframes, ORB matching of the two sides' points, Sim(3) RANSAC (defaults: ORB-SLAM2's LoopClosing).
   */
   struct Loop {
-    int consistency = 3;              //!< consecutive keyframes whose candidates agree before a loop is verified
-    int minKeyframesBetween = 10;     //!< keyframes after the map's start (or the last loop) before detecting
-    int matchMaxDistance = 50;        //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
-    double matchRatio = 0.75;         //!< best distance below this times the second best (ORB-SLAM loop search)
-    int minMatches = 20;              //!< ORB matches needed to try the Sim(3) (ORB-SLAM: 20)
-    int minInliers = 20;              //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
-    double ransacThresholdPx = 3.035; //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
+    int consistency = 3;                   //!< consecutive keyframes whose candidates agree before a loop is verified
+    int minKeyframesBetween = 10;          //!< keyframes after the map's start (or the last loop) before detecting
+    int matchMaxDistance = 50;             //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double matchRatio = 0.75;              //!< best distance below this times the second best (ORB-SLAM loop search)
+    int minMatches = 20;                   //!< ORB matches needed to try the Sim(3) (ORB-SLAM: 20)
+    int minInliers = 20;                   //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
+    double ransacThresholdPx = 3.035;      //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
+    double maxRotationCorrectionDeg = 30.; //!< a loop rotating the map more than this is refused (aliasing)
   };
 
   //! System-wide behaviour.
   struct System {
-    Mode mode = modeVoStrict;              //!< see Mode (odometry only until loop closure exists)
+    Mode mode = modeVoStrict;              //!< see Mode (vo-strict until slam is measured better everywhere)
     bool deterministic = false;            //!< map in the caller's thread: identical output run to run
     int workerThreads = 0;                 //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them

@@ -99,6 +99,15 @@ public:
   unsigned int getLaps() const { return m_laps; } //!< laps of the loop
 
   /*!
+    false (default): the camera pans across the front wall as it goes round; true: it looks away from the centre of
+    its loop and turns a full circle per lap, filming the four walls in turn (what it saw first leaves the view, as
+    in a walk round a building). A lap must then take at least 400 frames (0.9 degree per frame at most); configure()
+    throws otherwise. Takes effect at the next configure().
+  */
+  void setLookOutward(bool outward) { m_lookOutward = outward; }
+  bool getLookOutward() const { return m_lookOutward; } //!< see setLookOutward()
+
+  /*!
     Set up the scene, camera and trajectory (loads the textures on first call or when the path changed).
     \param width, height : image size, pixels (>= 16 each). The focal length scales with the width (500 px at 640).
     \param frames : frame count (>= 2); frame frames - 1 has the pose of frame 0.
@@ -175,6 +184,7 @@ private:
   std::string m_imagesDataPath, m_loadedPath;
   unsigned int m_width, m_height, m_frames, m_seed;
   unsigned int m_laps = 1;
+  bool m_lookOutward = false;
   double m_fps;
   Effects m_effects;
   std::unique_ptr<hslam::SyntheticRenderer> m_renderer;
