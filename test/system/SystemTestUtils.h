@@ -54,18 +54,31 @@ inline vpHSlamTrajectory syntheticGroundTruth(const vpHSlamSyntheticScene &scene
   once and shared by the test processes (rendering 640x480 frames takes ~0.1 s each): written under a temporary
   name, then renamed, so concurrent tests never read a half-written sequence.
 */
-inline std::string syntheticSequence(unsigned int width, unsigned int height, unsigned int frames, unsigned int seed)
+inline std::string syntheticSequence(unsigned int width, unsigned int height, unsigned int frames, unsigned int seed,
+                                     unsigned int laps = 1, bool lookOutward = false,
+                                     const vpHSlamSyntheticScene::Effects &effects = vpHSlamSyntheticScene::Effects())
 {
   const char *tmp = std::getenv("TMPDIR");
   const std::string base = (tmp && *tmp) ? tmp : "/tmp";
-  const std::string dir = base + "/hslam-test-synthetic-" + std::to_string(width) + "x" + std::to_string(height) + "-" +
-                          std::to_string(frames) + "-" + std::to_string(seed);
+  std::string dir = base + "/hslam-test-synthetic-" + std::to_string(width) + "x" + std::to_string(height) + "-" +
+                    std::to_string(frames) + "-" + std::to_string(seed);
+  if (laps != 1 || lookOutward) {
+    dir += "-laps" + std::to_string(laps) + (lookOutward ? "-outward" : "");
+  }
+  if (effects.vignette || effects.response || effects.exposureChanges || effects.motionBlur ||
+      effects.noiseSigma > 0.) {
+    dir += std::string("-fx") + (effects.vignette ? "v" : "") + (effects.response ? "r" : "") +
+           (effects.exposureChanges ? "e" : "") + (effects.motionBlur ? "b" : "") +
+           std::to_string(static_cast<int>(effects.noiseSigma * 100.));
+  }
   if (pathExists(dir + "/complete")) {
     return dir;
   }
   const std::string staging = dir + ".staging." + std::to_string(::getpid());
   vpHSlamSyntheticScene scene;
-  scene.configure(width, height, frames, 30., seed);
+  scene.setLaps(laps);
+  scene.setLookOutward(lookOutward);
+  scene.configure(width, height, frames, 30., seed, effects);
   scene.writeSequence(staging);
   std::ofstream(staging + "/complete") << "done\n";
   if (std::rename(staging.c_str(), dir.c_str()) != 0) {

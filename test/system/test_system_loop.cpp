@@ -1,0 +1,77 @@
+// Loop closure (issue 10) through vpHSlam: the synthetic room filmed wall after wall twice (look-outward loop,
+// 2 laps of 400 frames, 320x240, noise, motion blur, exposure changes, vignette, response), fast preset, direct
+// tracking. A sliding window cannot close this loop by itself (what it saw first has left it): vo-strict drifts,
+// slam must detect the revisit, verify it, correct the old side and end more accurate; and the shared real
+// sequences, which have no loop, must give none.
+#include "HSlamTestData.h"
+#include "SystemTestUtils.h"
+
+#include <visp3/hslam/vpHSlam.h>
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+
+namespace
+{
+constexpr unsigned int kWidth = 320, kHeight = 240, kLaps = 2, kFramesPerLap = 400, kSeed = 1;
+constexpr unsigned int kFrames = kLaps * kFramesPerLap + 1;
+
+vpHSlamParameters fastPreset(vpHSlamParameters::Mode mode)
+{
+  vpHSlamParameters params;
+  params.load(std::string(HSLAM_SOURCE_DIR) + "/data/hslam-fast.yaml");
+  params.system.deterministic = true;
+  params.system.mode = mode;
+  return params;
+}
+} // namespace
+
+TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
+{
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  vpHSlamSyntheticScene::Effects effects;
+  effects.noiseSigma = 4.;
+  effects.motionBlur = effects.exposureChanges = effects.vignette = effects.response = true;
+  const std::string dir = hslam_test::syntheticSequence(kWidth, kHeight, kFrames, kSeed, kLaps, true, effects);
+  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(dir + "/groundtruth.txt");
+  const hslam_test::SystemRun slam = hslam_test::runSource(dir, 0, fastPreset(vpHSlamParameters::modeSlam));
+  const hslam_test::SystemRun strict = hslam_test::runSource(dir, 0, fastPreset(vpHSlamParameters::modeVoStrict));
+  const double ateSlam = hslam_test::simAte(gt, slam.trajectory);
+  const double ateStrict = hslam_test::simAte(gt, strict.trajectory);
+  const vpHSlam::Statistics &s = slam.statistics;
+  std::cout << "outward loop, 2 laps: slam tracked " << s.trackedFrames << "/" << kFrames << ", loops "
+            << s.loopsDetected << " (" << s.loopsCorrected << " corrected, last correction " << s.lastLoopCorrectionMs
+            << " ms, " << s.loopCandidatesVerified << " candidates verified), ATE " << ateSlam
+            << " m; vo-strict tracked " << strict.statistics.trackedFrames << ", " << strict.statistics.segments
+            << " segment(s), ATE " << ateStrict << " m" << std::endl;
+  EXPECT_GE(s.loopsDetected, 1u);
+  EXPECT_GE(s.loopsCorrected, 1u);
+  EXPECT_EQ(s.segments, 1u);
+  EXPECT_GE(s.trackedFrames, strict.statistics.trackedFrames);
+  EXPECT_LT(ateSlam, ateStrict);
+  EXPECT_LT(ateSlam, 0.06);
+}
+
+TEST(SystemLoop, NoFalseLoopOnSequencesWithoutOne)
+{
+  int found = 0;
+  for (const char *name : {"kitti06_000-050", "tsukuba_cg_000-149", "7scenes_redkitchen_000-299"}) {
+    const std::string path = hslam_test::sharedData(name);
+    if (path.empty()) {
+      std::cout << name << ": not found under " << hslam_test::sharedDataDir() << ", skipped" << std::endl;
+      continue;
+    }
+    ++found;
+    const hslam_test::SystemRun run = hslam_test::runSource(path, 0, fastPreset(vpHSlamParameters::modeSlam));
+    std::cout << name << ": " << run.statistics.loopsDetected << " loops, " << run.statistics.loopCandidatesVerified
+              << " candidates verified" << std::endl;
+    EXPECT_EQ(run.statistics.loopsDetected, 0u) << name;
+  }
+  if (found == 0) {
+    GTEST_SKIP() << "no shared sequence found under " << hslam_test::sharedDataDir()
+                 << " (set HSLAM_SHARED_DATA_DIR to run this test)";
+  }
+}
