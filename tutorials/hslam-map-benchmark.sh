@@ -1,16 +1,21 @@
 #!/usr/bin/env bash
-# The global map (issue 9): vo-strict (window only, DSO-like) against vo-reuse (marginalised points kept as a global
-# map and re-used in the window) on the shared real sequences and on synthetic sequences that drive the same loop
-# several times, and the memory a marginalised keyframe costs on a long run.
+# The global map and loop closure (issues 9, 10): vo-strict (window only, DSO-like), vo-reuse (marginalised points
+# kept as a global map and re-used in the window) and slam (vo-reuse + loop detection and pose-graph correction) on
+# the shared real sequences and on synthetic sequences that drive the same loop several times, and the memory a
+# marginalised keyframe costs on a long run.
 #
 #   bash tutorials/hslam-map-benchmark.sh [BUILD_DIR] [-- extra options for tutorial-hslam-dataset]
 #   e.g. bash tutorials/hslam-map-benchmark.sh build -- --config data/hslam-fast.yaml
 #
 # Runs are deterministic runs of tutorial-hslam-dataset evaluated with tutorial-hslam-evaluate (Sim(3) ATE). Sections:
-#   real    per shared sequence, tracking mode (TRACKING) and map mode: median ATE of the runs with
+#   real    per shared sequence, tracking mode (TRACKING) and map mode (MODES): median ATE of the runs with
 #           features.desiredImmatureDensity = 490 495 500 505 510 (one run says little: see the hybrid benchmark's
 #           spread), the runs' ATEs, mapping ms per keyframe (median of the runs' medians), re-activated and fused
-#           global points per keyframe, share of the window's points from the global map, culled keyframes
+#           global points per keyframe, share of the window's points from the global map, culled keyframes,
+#           loops detected (sum over the runs: these sequences have none)
+#   loop    the synthetic room filmed wall after wall (--look-outward), 2 laps of 400 frames, 320x240 with the effects
+#           below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same 5 runs and
+#           medians as "real", plus loops detected / corrected and the longest correction
 #   laps    synthetic room (tutorial-hslam-synthetic, LAP_FRAMES frames a lap, LAPS laps, 320x240, noise, motion
 #           blur, exposure changes, vignette, response) per tracking and map mode: ATE, the drift between start and
 #           end of the run (TUM monoVO alignment error with 3 s segments: the loop ends where it started), mapping ms,
@@ -19,8 +24,8 @@
 #           memory growth per keyframe after the first 50 keyframes against the statistics' memory per marginalised
 #           keyframe (needs the test programs built: HSLAM_BUILD_TESTS)
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-map-bench), SEQUENCES, TRACKING
-# (default "hybrid direct"), SECTIONS (default "real laps memory"), LAPS (default "2 3"), LAP_FRAMES (default 300),
-# SOAK_FRAMES (default 4000).
+# (default "hybrid direct"), MODES (default "vo-strict vo-reuse slam"), SECTIONS (default "real loop laps memory"),
+# LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000).
 set -uo pipefail # not -e: one failed run must not end the benchmark
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -35,11 +40,21 @@ data="${DATA:-$repo/../shared/data}"
 out="${OUT:-/tmp/hslam-map-bench}"
 sequences="${SEQUENCES:-7scenes_redkitchen_000-299 tsukuba_cg_000-149 kitti06_000-050}"
 tracking_modes="${TRACKING:-hybrid direct}"
-sections="${SECTIONS:-real laps memory}"
+sections="${SECTIONS:-real loop laps memory}"
+map_modes="${MODES:-vo-strict vo-reuse slam}"
 laps_list="${LAPS:-2 3}"
 lap_frames="${LAP_FRAMES:-300}"
 soak_frames="${SOAK_FRAMES:-4000}"
 source "$repo/tutorials/benchmark-common.sh"
+
+sum_json() { # KEY PREFIX... -> sum of the key over the runs' statistics
+  local key="$1" total=0 p
+  shift
+  for p in "$@"; do
+    total=$((total + $(json "$p.json" "$key" | sed 's/nan/0/')))
+  done
+  echo "$total"
+}
 
 reuse_columns() { # PREFIX... -> medians of the re-use statistics of the runs
   local r=() f=() s=() c=() m=() p
@@ -57,11 +72,12 @@ reuse_columns() { # PREFIX... -> medians of the re-use statistics of the runs
 
 if has_section real; then
   echo "== real sequences: median of 5 runs (point budget 490..510)"
-  printf "%-28s %-7s %-9s %9s %8s %7s %7s %7s %7s   %s\n" sequence track map ate map_ms react fused share culled runs
+  printf "%-28s %-7s %-9s %9s %8s %7s %7s %7s %7s %5s   %s\n" sequence track map ate map_ms react fused share culled \
+    loops runs
   for seq in $sequences; do
     [[ -d "$data/$seq" ]] || { echo "$seq: not found under $data, skipped"; continue; }
     for track in $tracking_modes; do
-      for mode in vo-strict vo-reuse; do
+      for mode in $map_modes; do
         ates=()
         prefixes=()
         for value in 490 495 500 505 510; do
@@ -75,9 +91,51 @@ if has_section real; then
           fi
         done
         [[ ${#prefixes[@]} -gt 0 ]] || continue
-        printf "%-28s %-7s %-9s %9.4f %s   %s\n" "$seq" "$track" "$mode" "$(median "${ates[@]}")" \
-          "$(reuse_columns "${prefixes[@]}")" "${ates[*]}"
+        printf "%-28s %-7s %-9s %9.4f %s %5s   %s\n" "$seq" "$track" "$mode" "$(median "${ates[@]}")" \
+          "$(reuse_columns "${prefixes[@]}")" "$(sum_json loops_detected "${prefixes[@]}")" "${ates[*]}"
       done
+    done
+  done
+  echo
+fi
+
+if has_section loop; then
+  synthetic="$build/tutorials/tutorial-hslam-synthetic"
+  seq="$out/synthetic-outward-2laps"
+  echo "== loop: the room filmed wall after wall, 2 laps of 400 frames (320x240, noise 4, blur, exposure, vignette,"
+  echo "   response); median of 5 runs (point budget 490..510)"
+  if [[ ! -f "$seq/complete" ]]; then
+    rm -rf "$seq"
+    "$synthetic" --output "$seq" --frames 801 --laps 2 --look-outward --width 320 --height 240 --noise 4 \
+      --motion-blur --exposure-changes --vignette --response > "$out/synthetic-outward.log" 2>&1 &&
+      touch "$seq/complete" || echo "outward loop: generation failed, see $out/synthetic-outward.log"
+  fi
+  printf "%-7s %-9s %9s %10s %8s %12s %10s   %s\n" track map ate tracked map_ms loops/corr max_corr_ms runs
+  for track in $tracking_modes; do
+    for mode in $map_modes; do
+      ates=()
+      prefixes=()
+      for value in 490 495 500 505 510; do
+        prefix="$out/outward.$track.$mode.p$value"
+        if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" --set "features.desiredImmatureDensity=$value"; then
+          ates+=("$(ate "$prefix")")
+          prefixes+=("$prefix")
+        else
+          ates+=(nan)
+        fi
+      done
+      [[ ${#prefixes[@]} -gt 0 ]] || continue
+      maps=()
+      tracks=()
+      worst=0
+      for p in "${prefixes[@]}"; do
+        maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
+        tracks+=("$(json "$p.json" tracked_frames)")
+        worst="$(awk -v a="$worst" -v b="$(json "$p.json" last_loop_correction_ms)" 'BEGIN { print (b > a ? b : a) }')"
+      done
+      printf "%-7s %-9s %9.4f %10s %8.2f %12s %10.1f   %s\n" "$track" "$mode" "$(median "${ates[@]}")" \
+        "$(median "${tracks[@]}")/801" "$(median "${maps[@]}")" \
+        "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" "$worst" "${ates[*]}"
     done
   done
   echo
@@ -98,7 +156,7 @@ if has_section laps; then
         touch "$seq/complete" || { echo "synthetic $laps laps: generation failed, see $out/synthetic-$laps.log"; continue; }
     fi
     for track in $tracking_modes; do
-      for mode in vo-strict vo-reuse; do
+      for mode in $map_modes; do
         prefix="$out/synthetic-$laps.$track.$mode"
         run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" || continue
         drift="$("$evaluate" --groundtruth "$seq/groundtruth.txt" --estimate "$prefix.txt" --segment-length 3 \
@@ -131,7 +189,8 @@ if has_section memory; then
 fi
 echo "(ATE and drift in ground-truth units: metres, Tsukuba centimetres; map_ms: mapping ms per keyframe; react/fused:"
 echo " global points re-activated / fused per keyframe; share: of the window's active points, from the global map;"
-echo " culled: share of the marginalised keyframes culled; kb_kf: memory per marginalised keyframe; files in $out)"
+echo " culled: share of the marginalised keyframes culled; kb_kf: memory per marginalised keyframe; loops/corr: loops"
+echo " detected / corrected summed over the runs; max_corr_ms: longest loop correction; files in $out)"
 if [[ $failures -gt 0 ]]; then
   echo "$failures run(s) failed"
   exit 1

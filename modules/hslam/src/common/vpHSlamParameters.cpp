@@ -169,6 +169,7 @@ const Field kFields[] = {
   HSLAM_PARAM(globalMap, reuseMaxKeyframes, atLeast(1), "stored keyframes searched per new keyframe"),
   HSLAM_PARAM(globalMap, fusionSigmas, positive(), "late fusion: depths agree within this many sigmas"),
   HSLAM_PARAM(globalMap, reuse, anyValue(), "re-use global points in the window (off: kept, not re-used)"),
+  HSLAM_PARAM(globalMap, priorVarianceScale, positive(), "global depth variances times this when re-used"),
 
   HSLAM_PARAM(loop, consistency, atLeast(1), "consecutive keyframes agreeing on a loop candidate"),
   HSLAM_PARAM(loop, minKeyframesBetween, atLeast(0), "keyframes after the start or the last loop first"),

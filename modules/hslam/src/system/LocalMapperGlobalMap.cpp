@@ -142,7 +142,12 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
   }
   std::vector<bool> eraseImmature(newest.immature.size(), false);
   int adopted = 0;
-  const std::vector<ReuseMatch> matches = matchGlobalPoints(m_globalMap, searched, target, options);
+  // The stored variance is the window's photometric one (grey-level noise 1, poses held): priorVarianceScale
+  // makes the re-used estimate count for less against the new observations.
+  std::vector<ReuseMatch> matches = matchGlobalPoints(m_globalMap, searched, target, options);
+  for (ReuseMatch &match : matches) {
+    match.idepthVar *= g.priorVarianceScale;
+  }
   int refused = 0;
   for (const ReuseMatch &match : matches) {
     const size_t ii = keypointToImmature[static_cast<size_t>(match.keypoint)];
@@ -205,7 +210,8 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
         keypointToPoint.push_back(i);
       }
     }
-    for (const ReuseMatch &match : matchGlobalPoints(m_globalMap, searched, t, options)) {
+    for (ReuseMatch match : matchGlobalPoints(m_globalMap, searched, t, options)) {
+      match.idepthVar *= g.priorVarianceScale;
       MapPoint &p = host->points[keypointToPoint[static_cast<size_t>(match.keypoint)]];
       if (p.fromGlobalMap || std::fabs(match.idepth - p.idepth) > g.fusionSigmas * std::sqrt(p.idepthVar)) {
         continue;

@@ -167,6 +167,7 @@ public:
     int reuseMaxKeyframes = 10;     //!< stored keyframes searched per new keyframe (most overlapping first)
     double fusionSigmas = 2.;       //!< late fusion: projected depth within this many standard deviations
     bool reuse = true;              //!< re-use global points in the window (off: the map is kept, not re-used)
+    double priorVarianceScale = 1.; //!< global depth variances are multiplied by this when re-used (> 1: less trust)
   };
 
   /*!
