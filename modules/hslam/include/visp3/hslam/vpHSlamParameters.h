@@ -158,16 +158,16 @@ public:
     fusionSigmas standard deviations (paper sec. 3.3: 2).
   */
   struct GlobalMap {
-    int covisibilityMinShared = 15; //!< points two keyframes share to get a co-visibility edge (ORB-SLAM: 15)
-    double cullObservedShare = 0.9; //!< culling: share of points seen by cullMinObservers others (ORB-SLAM)
-    int cullMinObservers = 3;       //!< culling: keyframes from outside the window that see a point (ORB-SLAM: 3)
-    double reuseRadiusPx = 10.;     //!< search radius of a projected global point, pixels at 640 px width
-    int reuseMaxDistance = 50;      //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
-    double reuseRatio = 0.8;        //!< best distance below this times the second best (ORB-SLAM map search)
-    int reuseMaxKeyframes = 10;     //!< stored keyframes searched per new keyframe (most overlapping first)
-    double fusionSigmas = 2.;       //!< late fusion: projected depth within this many standard deviations
-    bool reuse = true;              //!< re-use global points in the window (off: the map is kept, not re-used)
-    double priorVarianceScale = 1.; //!< global depth variances are multiplied by this when re-used (> 1: less trust)
+    int covisibilityMinShared = 15;  //!< points two keyframes share to get a co-visibility edge (ORB-SLAM: 15)
+    double cullObservedShare = 0.9;  //!< culling: share of points seen by cullMinObservers others (ORB-SLAM)
+    int cullMinObservers = 3;        //!< culling: keyframes from outside the window that see a point (ORB-SLAM: 3)
+    double reuseRadiusPx = 10.;      //!< search radius of a projected global point, pixels at 640 px width
+    int reuseMaxDistance = 50;       //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double reuseRatio = 0.8;         //!< best distance below this times the second best (ORB-SLAM map search)
+    int reuseMaxKeyframes = 10;      //!< stored keyframes searched per new keyframe (most overlapping first)
+    double fusionSigmas = 2.;        //!< late fusion: projected depth within this many standard deviations
+    bool reuse = true;               //!< re-use global points in the window (off: the map is kept, not re-used)
+    double priorVarianceScale = 10.; //!< re-used depth variances times this (> 1: trust less; measured, README)
   };
 
   /*!
