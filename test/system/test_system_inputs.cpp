@@ -37,6 +37,22 @@ TEST(SystemInputs, WrongImageSizeIsAClearError)
   EXPECT_EQ(slam.getStatistics().frames, 0u);
 }
 
+TEST(SystemInputs, LongInitialisationKeepsOnlyTheNewestFrames)
+{
+  // A camera that never initialises (a flat image): frames wait for the map, the oldest dropped past
+  // initializer.maxFramesToInitialize. Under AddressSanitizer, LeakSanitizer checks that the dropped ones are freed
+  // (ViSP 3.5's vpImage assignment leaked them when they were erased from a vector).
+  vpHSlamParameters params = deterministic();
+  params.initializer.maxFramesToInitialize = 5;
+  vpHSlam slam(smallCamera(), params);
+  vpImage<unsigned char> I(120, 160, 128);
+  for (int k = 0; k < 20; ++k) {
+    EXPECT_EQ(slam.track(I, 0.1 * k), vpHSlam::stateInitializing);
+  }
+  EXPECT_EQ(slam.getStatistics().frames, 20u);
+  EXPECT_EQ(slam.getStatistics().trackedFrames, 0u);
+}
+
 TEST(SystemInputs, EmptyImageIsAClearError)
 {
   vpHSlam slam(smallCamera(), deterministic());

@@ -143,7 +143,7 @@ vpHSlam::State SlamSystem::initialize(const FramePtr &frame, const vpImage<unsig
     pending.id = frame->id;
     m_pendingFrames.push_back(std::move(pending));
     if (static_cast<int>(m_pendingFrames.size()) > m_params.initializer.maxFramesToInitialize) {
-      m_pendingFrames.erase(m_pendingFrames.begin());
+      m_pendingFrames.pop_front();
     }
     return vpHSlam::stateInitializing;
   }

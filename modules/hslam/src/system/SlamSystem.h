@@ -144,7 +144,9 @@ private:
     double exposure = -1.;
     int id = -1;
   };
-  std::vector<PendingFrame> m_pendingFrames; //!< frames after m_initFirstFrame, oldest first
+  //! Frames after m_initFirstFrame, oldest first. A deque: the oldest leaves by pop_front, never by moving the others
+  //! (a vector's erase assigns vpImages, and ViSP 3.5's vpImage assignment leaked their buffers: LeakSanitizer).
+  std::deque<PendingFrame> m_pendingFrames;
   std::unique_ptr<CoarseTracker> m_backfillTracker;
   std::unique_ptr<HybridTracker> m_hybrid; //!< keypoints and indirect step (null in direct mode)
   IndirectStepResult m_indirect;           //!< the current frame's indirect step (its term is used by m_tracker)
