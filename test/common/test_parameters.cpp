@@ -1,7 +1,7 @@
 // vpHSlamParameters: YAML load/save round trip of every field, errors (unknown key, wrong type, out of range,
 // missing or malformed file), partial files, print(), validate(), mode names, and the committed default file.
 //
-// How a field forgotten in the table is caught: the table in vpHSlamParameters.cpp builds each row's YAML key
+// How a field forgotten in the table is caught: the table in common/ParameterTable.h builds each row's YAML key
 // from the same token as its member pointer, so a row cannot read one member and save it under another name; what
 // remains possible is a header field WITHOUT a row. The tests therefore take the list of fields from the header
 // itself (HeaderFields() parses the struct bodies of vpHSlamParameters.h: every declaration there is a setting

@@ -3,6 +3,8 @@
 #include "loop/PoseGraph.h"
 #include "loop/Sim3Solver.h"
 
+#include "HSlamTestCameras.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,15 +16,6 @@ namespace
 {
 using hslam::PinholeIntrinsics;
 using hslam::Sim3d;
-
-PinholeIntrinsics intrinsics()
-{
-  PinholeIntrinsics K;
-  K.fx = K.fy = 500.;
-  K.cx = 319.5;
-  K.cy = 239.5;
-  return K;
-}
 
 Sim3d randomSim3(std::mt19937 &rng, double trans, double rot, double logScale)
 {
@@ -70,7 +63,7 @@ TEST(Sim3Solver, RansacFindsTheSimilarityDespiteNoiseAndOutliers)
 {
   // Two keyframes seeing the same 150 points; the second keyframe's map has a scale of 1.6 (monocular drift).
   // Pixels have 0.5 px of noise, the 3D points 1 % depth noise, and 40 % of the matches are wrong.
-  const PinholeIntrinsics K = intrinsics();
+  const PinholeIntrinsics K = hslam_test::vgaPinhole500();
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> px(20., 620.), py(20., 460.), depth(2., 6.), unit(0., 1.);
   std::normal_distribution<double> pixelNoise(0., 0.5), depthNoise(0., 0.01);

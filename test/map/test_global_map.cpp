@@ -3,6 +3,8 @@
 #include "map/GlobalMap.h"
 #include "map/GlobalPointReuse.h"
 
+#include "HSlamTestCameras.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -17,15 +19,6 @@ using hslam::GlobalPoint;
 using hslam::GlobalPointState;
 using hslam::PinholeIntrinsics;
 using hslam::SE3d;
-
-PinholeIntrinsics intrinsics()
-{
-  PinholeIntrinsics K;
-  K.fx = K.fy = 500.;
-  K.cx = 319.5;
-  K.cy = 239.5;
-  return K;
-}
 
 GlobalPoint pointWithObservers(std::vector<int> observers)
 {
@@ -53,7 +46,7 @@ TEST(GlobalMap, InverseVarianceFusion)
 
 TEST(GlobalMap, InverseDepthTransferMatchesProjectionAndNumericVariance)
 {
-  const PinholeIntrinsics K = intrinsics();
+  const PinholeIntrinsics K = hslam_test::vgaPinhole500();
   SE3d::Tangent xi;
   xi << 0.2, -0.1, 0.3, 0.05, -0.08, 0.02;
   const SE3d targetMhost = SE3d::exp(xi);
@@ -158,7 +151,7 @@ TEST(GlobalMap, CullingRuleOnHandBuiltGraph)
 
 TEST(GlobalMap, ReuseMatchingFindsProjectedCornersAndCarriesTheirDepth)
 {
-  const PinholeIntrinsics K = intrinsics();
+  const PinholeIntrinsics K = hslam_test::vgaPinhole500();
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> pixel(40., 600.), pixelV(40., 440.), inv(0.2, 1.);
   std::uniform_int_distribution<int> bit(0, 1);

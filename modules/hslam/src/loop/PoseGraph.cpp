@@ -104,11 +104,7 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations)
       problem.SetParameterBlockConstant(x);
     }
   }
-  ceres::Solver::Options options;
-  options.max_num_iterations = maxIterations;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = loopSolverOptions(maxIterations, ceres::SPARSE_NORMAL_CHOLESKY);
   ceres::Solver::Summary summary;
   std::map<int, Vertex> backup = m_vertices;
   ceres::Solve(options, &problem, &summary);

@@ -15,6 +15,7 @@
 #include "math/Sim3.h"
 
 #include <ceres/autodiff_manifold.h>
+#include <ceres/solver.h>
 
 #include <array>
 #include <cmath>
@@ -23,6 +24,17 @@ namespace hslam
 {
 constexpr int kSim3ParameterSize = 8;
 constexpr int kSim3TangentSize = 7;
+
+//! Solver settings every loop-closure problem uses: one thread (the mapping thread's core), no output.
+inline ceres::Solver::Options loopSolverOptions(int maxIterations, ceres::LinearSolverType linearSolver)
+{
+  ceres::Solver::Options options;
+  options.max_num_iterations = maxIterations;
+  options.linear_solver_type = linearSolver;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  return options;
+}
 
 template <typename T> Sim3<T> sim3FromParameters(const T *x)
 {

@@ -152,11 +152,7 @@ bool refineSim3(const std::vector<Sim3Correspondence> &matches, const PinholeInt
         new ceres::HuberLoss(huberPx), x.data());
   }
   problem.SetManifold(x.data(), newSim3Manifold());
-  ceres::Solver::Options options;
-  options.max_num_iterations = kRefineIterations;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
+  const ceres::Solver::Options options = loopSolverOptions(kRefineIterations, ceres::DENSE_QR);
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (!summary.IsSolutionUsable() || !sim3ParametersValid(x.data())) {
