@@ -4,6 +4,7 @@
 #include "features/VocabularyFiles.h"
 #include "features/VocabularyFileSupport.h"
 
+#include "common/BinaryIo.h"
 #include "common/TextParsing.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -32,72 +33,11 @@ constexpr std::size_t kChecksumBytes = 8;
 
 std::string readVocabularyFile(const std::string &path)
 {
-  requireFileExists(path, "vocabulary file");
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throwAt(vpHSlamException::fileUnreadable, path, 0, "is a folder, not a vocabulary file");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throwAt(vpHSlamException::fileUnreadable, path, 0, "cannot open the vocabulary file");
-  }
-  // One read of the known size: several times faster than stream iterators on a 50 MB file.
-  std::string bytes;
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (!ec) {
-    bytes.resize(static_cast<std::size_t>(size));
-    in.read(&bytes[0], static_cast<std::streamsize>(size));
-    bytes.resize(static_cast<std::size_t>(in.gcount()));
-  }
-  if (in.bad() || ec) {
-    throwAt(vpHSlamException::fileUnreadable, path, 0, "read error");
-  }
-  if (bytes.empty()) {
-    throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary file");
-  }
-  return bytes;
+  return readBinaryFile(path, "vocabulary file");
 }
 
 namespace
 {
-
-// Little-endian encoding, independent of the host.
-void putU32(std::string &out, std::uint32_t v)
-{
-  for (int b = 0; b < 4; ++b) {
-    out.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
-  }
-}
-void putU64(std::string &out, std::uint64_t v)
-{
-  for (int b = 0; b < 8; ++b) {
-    out.push_back(static_cast<char>((v >> (8 * b)) & 0xff));
-  }
-}
-std::uint32_t getU32(const std::uint8_t *p)
-{
-  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
-}
-std::uint64_t getU64(const std::uint8_t *p)
-{
-  return std::uint64_t(getU32(p)) | (std::uint64_t(getU32(p + 4)) << 32);
-}
-
-//! Write bytes to a temporary file beside \e path, then rename it over \e path.
-void writeAtomically(const std::string &path, const std::string &bytes)
-{
-  const std::string temporary = path + ".partial";
-  std::ofstream out;
-  openForWriting(out, temporary);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  flushAndClose(out, temporary);
-  std::error_code ec;
-  std::filesystem::rename(temporary, path, ec);
-  if (ec) {
-    std::filesystem::remove(temporary, ec);
-    throwAt(vpHSlamException::fileUnreadable, path, 0, "cannot write the vocabulary file (rename failed)");
-  }
-}
 
 std::string descriptorToText(const OrbDescriptor &d)
 {
@@ -187,19 +127,19 @@ OrbVocabulary loadVocabularyBinary(const std::string &path)
     throwAt(vpHSlamException::parseError, path, 0,
             "truncated: " + std::to_string(bytes.size()) + " bytes, shorter than the header");
   }
-  const std::uint32_t version = getU32(p + 8);
+  const std::uint32_t version = loadU32(p + 8);
   if (version != kBinaryVersion) {
     throwAt(vpHSlamException::unsupported, path, 0,
             "binary vocabulary format version " + std::to_string(version) + ", this build reads version " +
                 std::to_string(kBinaryVersion));
   }
-  const std::uint32_t descriptorBytes = getU32(p + 12);
+  const std::uint32_t descriptorBytes = loadU32(p + 12);
   if (descriptorBytes != static_cast<std::uint32_t>(kOrbDescriptorBytes)) {
     throwAt(vpHSlamException::unsupported, path, 0,
             "descriptors of " + std::to_string(descriptorBytes) + " bytes, expected " +
                 std::to_string(kOrbDescriptorBytes) + " (256-bit ORB)");
   }
-  const std::uint32_t nodes = getU32(p + 32), words = getU32(p + 36);
+  const std::uint32_t nodes = loadU32(p + 32), words = loadU32(p + 36);
   if (nodes < 2 || words == 0) {
     throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary (no word)");
   }
@@ -215,14 +155,14 @@ OrbVocabulary loadVocabularyBinary(const std::string &path)
             std::to_string(bytes.size() - expected) + " unexpected bytes after the checksum");
   }
   const std::size_t payload = static_cast<std::size_t>(expected - kChecksumBytes);
-  if (hashBytes(p, payload) != getU64(p + payload)) {
+  if (hashBytes(p, payload) != loadU64(p + payload)) {
     throwAt(vpHSlamException::parseError, path, 0, "corrupt: checksum mismatch");
   }
 
   OrbVocabulary::Parts parts;
-  parts.branching = static_cast<int>(getU32(p + 16));
-  parts.levels = static_cast<int>(getU32(p + 20));
-  const std::uint32_t weighting = getU32(p + 24), scoring = getU32(p + 28);
+  parts.branching = static_cast<int>(loadU32(p + 16));
+  parts.levels = static_cast<int>(loadU32(p + 20));
+  const std::uint32_t weighting = loadU32(p + 24), scoring = loadU32(p + 28);
   if (weighting > static_cast<std::uint32_t>(kDbow2MaxWeighting) ||
       scoring > static_cast<std::uint32_t>(kDbow2MaxScoring)) {
     throwAt(vpHSlamException::parseError, path, 0, "unknown weighting or scoring type");
@@ -233,14 +173,14 @@ OrbVocabulary loadVocabularyBinary(const std::string &path)
   parts.descriptors.resize(nodes);
   const std::uint8_t *record = p + kHeaderBytes;
   for (std::uint32_t n = 1; n < nodes; ++n, record += kNodeRecordBytes) {
-    parts.parents[n] = getU32(record);
+    parts.parents[n] = loadU32(record);
     parts.descriptors[n] = descriptorFromBytes(record + 4);
   }
   parts.wordNodes.resize(words);
   parts.wordWeights.resize(words);
   for (std::uint32_t w = 0; w < words; ++w, record += kWordRecordBytes) {
-    parts.wordNodes[w] = getU32(record);
-    const std::uint64_t bits = getU64(record + 4);
+    parts.wordNodes[w] = loadU32(record);
+    const std::uint64_t bits = loadU64(record + 4);
     std::memcpy(&parts.wordWeights[w], &bits, sizeof(double));
   }
   OrbVocabulary vocabulary;
@@ -333,31 +273,32 @@ void saveVocabulary(const OrbVocabulary &vocabulary, const std::string &path, Vo
   const OrbVocabulary::Parts parts = vocabulary.parts();
   const std::size_t nodes = parts.parents.size(), words = parts.wordNodes.size();
   if (format == VocabularyFormat::binary || format == VocabularyFormat::automatic) {
-    std::string bytes;
+    ByteWriter writer;
+    std::string &bytes = writer.bytes();
     bytes.reserve(kHeaderBytes + (nodes - 1) * kNodeRecordBytes + words * kWordRecordBytes + kChecksumBytes);
     bytes.append(kMagic, 8);
-    putU32(bytes, kBinaryVersion);
-    putU32(bytes, kOrbDescriptorBytes);
-    putU32(bytes, static_cast<std::uint32_t>(parts.branching));
-    putU32(bytes, static_cast<std::uint32_t>(parts.levels));
-    putU32(bytes, static_cast<std::uint32_t>(parts.weighting));
-    putU32(bytes, static_cast<std::uint32_t>(parts.scoring));
-    putU32(bytes, static_cast<std::uint32_t>(nodes));
-    putU32(bytes, static_cast<std::uint32_t>(words));
+    writer.u32(kBinaryVersion);
+    writer.u32(kOrbDescriptorBytes);
+    writer.u32(static_cast<std::uint32_t>(parts.branching));
+    writer.u32(static_cast<std::uint32_t>(parts.levels));
+    writer.u32(static_cast<std::uint32_t>(parts.weighting));
+    writer.u32(static_cast<std::uint32_t>(parts.scoring));
+    writer.u32(static_cast<std::uint32_t>(nodes));
+    writer.u32(static_cast<std::uint32_t>(words));
     for (std::size_t n = 1; n < nodes; ++n) {
-      putU32(bytes, parts.parents[n]);
+      writer.u32(parts.parents[n]);
       for (int j = 0; j < kOrbDescriptorBytes; ++j) {
         bytes.push_back(static_cast<char>(parts.descriptors[n].byte(j)));
       }
     }
     for (std::size_t w = 0; w < words; ++w) {
-      putU32(bytes, parts.wordNodes[w]);
+      writer.u32(parts.wordNodes[w]);
       std::uint64_t bits = 0;
       std::memcpy(&bits, &parts.wordWeights[w], sizeof(double));
-      putU64(bytes, bits);
+      writer.u64(bits);
     }
-    putU64(bytes, hashBytes(bytes.data(), bytes.size()));
-    writeAtomically(path, bytes);
+    writer.u64(hashBytes(bytes.data(), bytes.size()));
+    writeFileAtomically(path, bytes, "vocabulary file");
     return;
   }
 
@@ -379,7 +320,7 @@ void saveVocabulary(const OrbVocabulary &vocabulary, const std::string &path, Vo
       appendNumber(out, nodeWeights[n], std::chars_format::general, 17); // exact double round trip
       out += '\n';
     }
-    writeAtomically(path, out);
+    writeFileAtomically(path, out, "vocabulary file");
     return;
   }
 

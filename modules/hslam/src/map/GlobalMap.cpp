@@ -27,8 +27,8 @@ void GlobalMap::countShared(const GlobalPoint &p, int host, int sign)
       if (a == b) {
         continue;
       }
-      int &count = m_shared[std::make_pair(std::min(a, b), std::max(a, b))];
-      count += sign;
+      m_shared[a][b] += sign;
+      m_shared[b][a] += sign;
     }
   }
 }
@@ -43,6 +43,22 @@ bool GlobalMap::add(GlobalKeyframe keyframe)
     }
   }
   return applyCulling(id);
+}
+
+void GlobalMap::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
+{
+  clear();
+  for (GlobalKeyframe &keyframe : keyframes) {
+    const int id = keyframe.id;
+    GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
+    for (const GlobalPoint &p : kf.points) {
+      if (p.state == GlobalPointState::stored) {
+        countShared(p, id, +1);
+      }
+    }
+    m_culled += kf.culled ? 1 : 0;
+  }
+  m_posePose = std::move(edges);
 }
 
 void GlobalMap::addPosePoseEdge(const PosePoseEdge &edge)
@@ -78,20 +94,20 @@ const GlobalKeyframe *GlobalMap::find(int id) const
 std::vector<CovisibilityEdge> GlobalMap::covisibilityEdges() const
 {
   std::vector<CovisibilityEdge> out;
-  for (const auto &e : m_shared) {
-    if (e.second < m_options.covisibilityMinShared) {
-      continue;
+  for (const auto &row : m_shared) {
+    for (const auto &e : row.second) {
+      if (row.first >= e.first || e.second < m_options.covisibilityMinShared) {
+        continue; // each edge once (a < b)
+      }
+      if (isCulled(row.first) || isCulled(e.first)) {
+        continue;
+      }
+      CovisibilityEdge edge;
+      edge.a = row.first;
+      edge.b = e.first;
+      edge.weight = e.second;
+      out.push_back(edge);
     }
-    const GlobalKeyframe *a = find(e.first.first);
-    const GlobalKeyframe *b = find(e.first.second);
-    if ((a && a->culled) || (b && b->culled)) {
-      continue;
-    }
-    CovisibilityEdge edge;
-    edge.a = e.first.first;
-    edge.b = e.first.second;
-    edge.weight = e.second;
-    out.push_back(edge);
   }
   return out;
 }
@@ -99,14 +115,22 @@ std::vector<CovisibilityEdge> GlobalMap::covisibilityEdges() const
 std::vector<int> GlobalMap::covisibleWith(int id) const
 {
   std::vector<int> out;
-  for (const CovisibilityEdge &e : covisibilityEdges()) {
-    if (e.a == id) {
-      out.push_back(e.b);
-    } else if (e.b == id) {
-      out.push_back(e.a);
+  auto row = m_shared.find(id);
+  if (row == m_shared.end() || isCulled(id)) {
+    return out;
+  }
+  for (const auto &e : row->second) {
+    if (e.second >= m_options.covisibilityMinShared && !isCulled(e.first)) {
+      out.push_back(e.first);
     }
   }
   return out;
+}
+
+bool GlobalMap::isCulled(int id) const
+{
+  const GlobalKeyframe *kf = find(id);
+  return kf && kf->culled;
 }
 
 bool GlobalMap::applyCulling(int id)
@@ -159,7 +183,10 @@ double GlobalMap::memoryBytes() const
       bytes += static_cast<double>(p.observers.capacity() * sizeof(int));
     }
   }
-  bytes += static_cast<double>(m_shared.size()) * (sizeof(std::pair<std::pair<int, int>, int>) + kMapNodeOverhead);
+  for (const auto &row : m_shared) {
+    bytes += sizeof(row) + kMapNodeOverhead;
+    bytes += static_cast<double>(row.second.size()) * (sizeof(std::pair<int, int>) + kMapNodeOverhead);
+  }
   bytes += static_cast<double>(m_posePose.capacity() * sizeof(PosePoseEdge));
   return bytes;
 }

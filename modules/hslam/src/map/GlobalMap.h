@@ -115,6 +115,12 @@ public:
   */
   bool add(GlobalKeyframe keyframe);
   void addPosePoseEdge(const PosePoseEdge &edge);
+  /*!
+    Replace the whole map by keyframes and edges read back from a map file: co-visibility is counted again from the
+    points' observers, culled flags are kept as they are (the culling rule is not applied again, so a saved and
+    reloaded map is the same map).
+  */
+  void restore(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges);
 
   /*!
     A stored point leaves the global map into the window (early adoption or late fusion): its co-visibility
@@ -145,10 +151,13 @@ public:
 
 private:
   void countShared(const GlobalPoint &p, int host, int sign);
+  bool isCulled(int id) const;
 
   Options m_options;
   std::map<int, GlobalKeyframe> m_keyframes;
-  std::map<std::pair<int, int>, int> m_shared; //!< (a < b) -> points seen by both
+  //! Symmetric adjacency: m_shared[a][b] = m_shared[b][a] = points seen by both (co-visibility queries per keyframe
+  //! read one row instead of every pair).
+  std::map<int, std::map<int, int>> m_shared;
   std::vector<PosePoseEdge> m_posePose;
   int m_culled = 0;
 };

@@ -147,6 +147,23 @@ public:
   };
   const LoopStatistics &loopStatistics() const { return m_loops; }
 
+  // ---- map files (vpHSlam::saveMap / loadMap)
+  /*!
+    The map as a file holds it: the global map's keyframes and edges, and the window's keyframes as if marginalised
+    now (marginalised and active points, pose-pose edges from the window's last linearisation). Observers and edges
+    naming keyframes that are not held (a window dropped when tracking was lost) are left out. The window is not
+    changed.
+  */
+  void mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges);
+  /*!
+    Make a loaded map the global map; only on an empty mapper (nothing tracked yet). Its keyframes keep their
+    segments and the mapper's next segment comes after them, so re-use and loop detection (which stay within a
+    segment) never mix the loaded map's coordinates with the new run's.
+  */
+  void restoreMap(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges);
+  //! Drop everything, global map included (vpHSlam::reset()); clear() keeps the global map.
+  void reset();
+
   //! Map points in world coordinates with their status: active window points and global ones (stored state).
   void mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const;
 
@@ -172,6 +189,11 @@ private:
   void marginalize(int keyframeId);
   //! Copy a marginalised keyframe into the global map with its pose-pose links (before the optimiser drops it).
   void storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs);
+  //! A window keyframe as the global map keeps it: marginalised points, and active ones too when asked (saveMap).
+  GlobalKeyframe leanKeyframe(const Keyframe &kf, bool withActivePoints) const;
+  //! Pose-pose edges of a keyframe from its pair information, plus temporal links to window neighbours it shared no
+  //! residual with.
+  std::vector<PosePoseEdge> posePoseEdges(const Keyframe &kf, const std::vector<PairInformation> &pairs) const;
   //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
   int reuseGlobalPoints(Keyframe &newest);
   //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.

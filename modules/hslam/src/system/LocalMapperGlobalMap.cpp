@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace hslam
 {
@@ -33,6 +34,39 @@ OrbMatcherOptions reuseMatcherOptions(const vpHSlamParameters::GlobalMap &g, int
   o.checkOrientation = true;
   return o;
 }
+
+/*!
+  The keyframe at \e cMw as a re-use target: the points of \e points (ImmaturePoint or MapPoint) that \e keep
+  accepts and that carry a descriptor become its keypoints; \e index maps a keypoint back to its point.
+*/
+template <typename Point, typename Keep>
+ReuseTarget makeReuseTarget(const SE3d &cMw, const PinholeIntrinsics &K, int width, int height, int segment,
+                            const std::vector<Point> &points, Keep keep, std::vector<size_t> &index)
+{
+  ReuseTarget target;
+  target.cMw = cMw;
+  target.K = K;
+  target.width = width;
+  target.height = height;
+  target.segment = segment;
+  // Corners only: re-using every described point (gradient pixels too, without the added corners) was measured
+  // worse (fast preset, hybrid, median of 5 runs: Tsukuba 0.334 cm vs 0.276 with corners).
+  target.cornersOnly = true;
+  index.clear();
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Point &pt = points[i];
+    if (pt.hasOrb && (pt.isCorner || !target.cornersOnly) && keep(pt)) {
+      FrameKeypoint k;
+      k.u = pt.u;
+      k.v = pt.v;
+      k.angleDeg = pt.orbAngleDeg;
+      k.descriptor = pt.orb;
+      target.keypoints.push_back(k);
+      index.push_back(i);
+    }
+  }
+  return target;
+}
 } // namespace
 
 bool LocalMapper::keepsGlobalMap() const
@@ -40,7 +74,7 @@ bool LocalMapper::keepsGlobalMap() const
   return m_impl->params.system.mode != vpHSlamParameters::modeVoStrict;
 }
 
-void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs)
+GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoints) const
 {
   GlobalKeyframe g;
   g.id = kf.id();
@@ -52,7 +86,8 @@ void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInf
   g.affine = kf.frame->affine;
   g.points.reserve(kf.points.size());
   for (const MapPoint &p : kf.points) {
-    if (p.status != PointStatus::marginalized || !(p.idepth > 0.) || !std::isfinite(p.idepthVar)) {
+    const bool kept = p.status == PointStatus::marginalized || (withActivePoints && p.status == PointStatus::active);
+    if (!kept || !(p.idepth > 0.) || !std::isfinite(p.idepthVar)) {
       continue;
     }
     GlobalPoint q;
@@ -69,32 +104,50 @@ void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInf
     g.points.push_back(std::move(q));
   }
   g.points.shrink_to_fit();
-  bool consecutiveLinked = false;
+  return g;
+}
+
+std::vector<PosePoseEdge> LocalMapper::posePoseEdges(const Keyframe &kf,
+                                                     const std::vector<PairInformation> &pairs) const
+{
+  std::vector<PosePoseEdge> edges;
+  const int id = kf.id();
+  bool linkedBefore = false, linkedAfter = false;
   for (const PairInformation &pair : pairs) {
     PosePoseEdge e;
-    e.from = kf.id();
+    e.from = id;
     e.to = pair.otherKeyframeId;
     e.toMfrom = pair.otherMthis;
     e.information = pair.information;
-    e.consecutive = pair.otherKeyframeId == kf.id() + 1;
-    consecutiveLinked = consecutiveLinked || e.consecutive;
+    e.consecutive = std::abs(pair.otherKeyframeId - id) == 1;
+    linkedBefore = linkedBefore || pair.otherKeyframeId == id - 1;
+    linkedAfter = linkedAfter || pair.otherKeyframeId == id + 1;
+    edges.push_back(e);
+  }
+  // The temporal chain stays whole: a neighbour in time still in the window that shared no residual with this
+  // keyframe (a jump) is linked anyway, with no information. Whichever of two consecutive keyframes leaves the
+  // window first makes the link, so every consecutive pair is linked once.
+  for (const KeyframePtr &other : m_window) {
+    const int o = other->id();
+    if ((o == id + 1 && !linkedAfter) || (o == id - 1 && !linkedBefore)) {
+      PosePoseEdge e;
+      e.from = id;
+      e.to = o;
+      e.toMfrom = other->frame->cMw * kf.frame->cMw.inverse();
+      e.consecutive = true;
+      edges.push_back(e);
+    }
+  }
+  return edges;
+}
+
+void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs)
+{
+  for (const PosePoseEdge &e : posePoseEdges(kf, pairs)) {
     m_globalMap.addPosePoseEdge(e);
   }
   const int id = kf.id();
-  if (!consecutiveLinked) {
-    // The next keyframe shared no residual (a jump): the temporal link still joins them, with no information.
-    for (const KeyframePtr &other : m_window) {
-      if (other->id() == id + 1) {
-        PosePoseEdge e;
-        e.from = id;
-        e.to = id + 1;
-        e.toMfrom = other->frame->cMw * kf.frame->cMw.inverse();
-        e.consecutive = true;
-        m_globalMap.addPosePoseEdge(e);
-      }
-    }
-  }
-  if (m_globalMap.add(std::move(g)) && m_impl->relocalization) {
+  if (m_globalMap.add(leanKeyframe(kf, false)) && m_impl->relocalization) {
     m_impl->relocalization->removeKeyframe(id);
   }
 }
@@ -114,28 +167,10 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
   }
 
   // Early adoption: the newest keyframe's corner candidates matched to global points.
-  ReuseTarget target;
-  target.cMw = newest.frame->cMw;
-  target.K = m.K0;
-  target.width = m.width;
-  target.height = m.height;
-  target.segment = m_segment;
-  // Corners only: re-using every described point (gradient pixels too, without the added corners) was measured
-  // worse (fast preset, hybrid, median of 5 runs: Tsukuba 0.334 cm vs 0.276 with corners).
-  target.cornersOnly = true;
   std::vector<size_t> keypointToImmature;
-  for (size_t i = 0; i < newest.immature.size(); ++i) {
-    const ImmaturePoint &pt = newest.immature[i];
-    if (pt.hasOrb && (pt.isCorner || !target.cornersOnly)) {
-      FrameKeypoint k;
-      k.u = pt.u;
-      k.v = pt.v;
-      k.angleDeg = pt.orbAngleDeg;
-      k.descriptor = pt.orb;
-      target.keypoints.push_back(k);
-      keypointToImmature.push_back(i);
-    }
-  }
+  const ReuseTarget target = makeReuseTarget(
+      newest.frame->cMw, m.K0, m.width, m.height, m_segment, newest.immature,
+      [](const ImmaturePoint &) { return true; }, keypointToImmature);
   const std::vector<int> searched = selectReuseKeyframes(m_globalMap, windowIds, target, g.reuseMaxKeyframes);
   if (searched.empty()) {
     return 0;
@@ -190,26 +225,10 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
   // fusionSigmas standard deviations absorb it (inverse-variance fusion, kept as the point's prior).
   int fused = 0;
   for (const KeyframePtr &host : m_window) {
-    ReuseTarget t;
-    t.cMw = host->frame->cMw;
-    t.K = m.K0;
-    t.width = m.width;
-    t.height = m.height;
-    t.segment = m_segment;
-    t.cornersOnly = target.cornersOnly;
     std::vector<size_t> keypointToPoint;
-    for (size_t i = 0; i < host->points.size(); ++i) {
-      const MapPoint &p = host->points[i];
-      if (p.status == PointStatus::active && p.hasOrb && (p.isCorner || !t.cornersOnly) && !p.fromGlobalMap) {
-        FrameKeypoint k;
-        k.u = p.u;
-        k.v = p.v;
-        k.angleDeg = p.orbAngleDeg;
-        k.descriptor = p.orb;
-        t.keypoints.push_back(k);
-        keypointToPoint.push_back(i);
-      }
-    }
+    const ReuseTarget t = makeReuseTarget(
+        host->frame->cMw, m.K0, m.width, m.height, m_segment, host->points,
+        [](const MapPoint &p) { return p.status == PointStatus::active && !p.fromGlobalMap; }, keypointToPoint);
     for (ReuseMatch match : matchGlobalPoints(m_globalMap, searched, t, options)) {
       match.idepthVar *= g.priorVarianceScale;
       MapPoint &p = host->points[keypointToPoint[static_cast<size_t>(match.keypoint)]];

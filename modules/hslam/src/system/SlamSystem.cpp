@@ -527,7 +527,7 @@ void SlamSystem::reset()
   synchronize();
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
-    m_mapper->clear();
+    m_mapper->reset(); // the global map too: a reset system starts from nothing (keyframe ids start again at 0)
   }
   dropPreparedReferenceAndSnapshot();
   m_recorder.clear();

@@ -34,6 +34,7 @@
 #define HSLAM_SYSTEM_SLAM_SYSTEM_H
 
 #include "map/Frame.h"
+#include "map/MapFile.h"
 #include "math/SE3.h"
 #include "system/FramePreprocessor.h"
 #include "system/LocalMapper.h"
@@ -84,12 +85,19 @@ public:
   vpHSlam::Statistics statistics() const;
   void synchronize();
   void reset();
+  void saveMap(const std::string &path);
+  void loadMap(const std::string &path);
 
   const FramePreprocessor &preprocessor() const { return m_preprocessor; }
   void rectifiedImage(vpImage<unsigned char> &I) const;
   const vpHSlamParameters &parameters() const { return m_params; }
 
 private:
+  //! The rectified camera, as map files record it.
+  MapCamera mapCamera() const;
+  //! Throws when the mode keeps no global map (vo-strict): \e operation names the call in the message.
+  void requireGlobalMap(const std::string &path, const char *operation) const;
+
   //! A tracked frame handed to mapping.
   struct MappingJob {
     FramePtr frame;

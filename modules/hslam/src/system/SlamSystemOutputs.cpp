@@ -32,7 +32,7 @@ std::vector<vpHSlam::Keyframe> SlamSystem::keyframes() const
       continue;
     }
     vpHSlam::Keyframe k;
-    k.id = static_cast<unsigned int>(i);
+    k.id = static_cast<unsigned int>(records[i].id);
     k.frameIndex = static_cast<unsigned int>(records[i].frameIndex);
     k.timestamp = records[i].timestamp;
     k.wMc = toVpHomogeneousMatrix(records[i].wMc);

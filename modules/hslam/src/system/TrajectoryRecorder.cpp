@@ -8,6 +8,7 @@
 #include <visp3/hslam/vpHSlamException.h>
 
 #include <algorithm>
+#include <map>
 #include <string>
 
 namespace hslam
@@ -16,12 +17,14 @@ void TrajectoryRecorder::addKeyframe(int keyframeId, int frameIndex, double time
                                      unsigned int segment)
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  if (keyframeId != static_cast<int>(m_keyframes.size())) {
+  const int expected = m_firstId + static_cast<int>(m_keyframes.size());
+  if (keyframeId != expected) {
     throw vpHSlamException(vpHSlamException::invalidArgument, std::string(__FILE__) + ": keyframe id " +
                                                                   std::to_string(keyframeId) + " recorded, " +
-                                                                  std::to_string(m_keyframes.size()) + " expected");
+                                                                  std::to_string(expected) + " expected");
   }
   KeyframeRecord r;
+  r.id = keyframeId;
   r.frameIndex = frameIndex;
   r.timestamp = timestamp;
   r.wMc = wMc;
@@ -29,11 +32,33 @@ void TrajectoryRecorder::addKeyframe(int keyframeId, int frameIndex, double time
   m_keyframes.push_back(r);
 }
 
+void TrajectoryRecorder::setFirstKeyframeId(int id)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  if (!m_keyframes.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           std::string(__FILE__) + ": first keyframe id set after keyframes were recorded");
+  }
+  m_firstId = id;
+}
+
+TrajectoryRecorder::KeyframeRecord *TrajectoryRecorder::findLocked(int id)
+{
+  const int index = id - m_firstId;
+  return index >= 0 && index < static_cast<int>(m_keyframes.size()) ? &m_keyframes[static_cast<size_t>(index)]
+                                                                    : nullptr;
+}
+
+const TrajectoryRecorder::KeyframeRecord *TrajectoryRecorder::findLocked(int id) const
+{
+  return const_cast<TrajectoryRecorder *>(this)->findLocked(id);
+}
+
 void TrajectoryRecorder::updateKeyframe(int keyframeId, const SE3d &wMc)
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  if (keyframeId >= 0 && keyframeId < static_cast<int>(m_keyframes.size())) {
-    m_keyframes[static_cast<size_t>(keyframeId)].wMc = wMc;
+  if (KeyframeRecord *k = findLocked(keyframeId)) {
+    k->wMc = wMc;
   }
 }
 
@@ -41,18 +66,20 @@ void TrajectoryRecorder::correctKeyframes(const std::vector<int> &ids, const std
                                           const std::vector<double> &scale)
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  std::vector<double> factor(m_keyframes.size(), 1.);
+  std::map<int, double> factor; // keyframe id -> scale of its correction, when not 1
   for (size_t i = 0; i < ids.size() && i < wMc.size() && i < scale.size(); ++i) {
-    if (ids[i] >= 0 && ids[i] < static_cast<int>(m_keyframes.size()) && scale[i] > 0.) {
-      m_keyframes[static_cast<size_t>(ids[i])].wMc = wMc[i];
-      factor[static_cast<size_t>(ids[i])] = scale[i];
+    KeyframeRecord *k = findLocked(ids[i]);
+    if (k && scale[i] > 0.) {
+      k->wMc = wMc[i];
+      if (scale[i] != 1.) {
+        factor[ids[i]] = scale[i];
+      }
     }
   }
   for (FrameRecord &f : m_frames) {
-    if (f.referenceKeyframe >= 0 && f.referenceKeyframe < static_cast<int>(factor.size()) &&
-        factor[static_cast<size_t>(f.referenceKeyframe)] != 1.) {
-      f.refMc =
-          SE3d(f.refMc.unitQuaternion(), f.refMc.translation() / factor[static_cast<size_t>(f.referenceKeyframe)]);
+    auto it = factor.find(f.referenceKeyframe);
+    if (it != factor.end()) {
+      f.refMc = SE3d(f.refMc.unitQuaternion(), f.refMc.translation() / it->second);
     }
   }
 }
@@ -60,9 +87,9 @@ void TrajectoryRecorder::correctKeyframes(const std::vector<int> &ids, const std
 void TrajectoryRecorder::setKeyframeInWindow(int keyframeId, bool inWindow, unsigned int activePoints)
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  if (keyframeId >= 0 && keyframeId < static_cast<int>(m_keyframes.size())) {
-    m_keyframes[static_cast<size_t>(keyframeId)].inWindow = inWindow;
-    m_keyframes[static_cast<size_t>(keyframeId)].activePoints = activePoints;
+  if (KeyframeRecord *k = findLocked(keyframeId)) {
+    k->inWindow = inWindow;
+    k->activePoints = activePoints;
   }
 }
 
@@ -93,20 +120,19 @@ void TrajectoryRecorder::addFrame(int frameIndex, double timestamp, int referenc
 
 SE3d TrajectoryRecorder::worldPoseLocked(const FrameRecord &f) const
 {
-  if (f.referenceKeyframe < 0 || f.referenceKeyframe >= static_cast<int>(m_keyframes.size())) {
-    return f.refMc; // anchored to the world itself
-  }
-  return m_keyframes[static_cast<size_t>(f.referenceKeyframe)].wMc * f.refMc;
+  const KeyframeRecord *k = findLocked(f.referenceKeyframe);
+  return k ? k->wMc * f.refMc : f.refMc; // without a keyframe: anchored to the world itself
 }
 
 SE3d TrajectoryRecorder::keyframePose(int keyframeId) const
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  if (keyframeId < 0 || keyframeId >= static_cast<int>(m_keyframes.size())) {
+  const KeyframeRecord *k = findLocked(keyframeId);
+  if (!k) {
     throw vpHSlamException(vpHSlamException::invalidArgument,
                            std::string(__FILE__) + ": unknown keyframe id " + std::to_string(keyframeId));
   }
-  return m_keyframes[static_cast<size_t>(keyframeId)].wMc;
+  return k->wMc;
 }
 
 bool TrajectoryRecorder::lastFramePose(SE3d &wMc) const
@@ -219,6 +245,7 @@ void TrajectoryRecorder::clear()
 {
   std::lock_guard<std::mutex> lock(m_mutex);
   m_keyframes.clear();
+  m_firstId = 0;
   m_frames.clear();
   m_frameSlot.clear();
 }

@@ -34,6 +34,7 @@ class VISP_EXPORT TrajectoryRecorder
 public:
   //! A keyframe's record.
   struct KeyframeRecord {
+    int id = -1;
     int frameIndex = -1;
     double timestamp = 0.;
     SE3d wMc;
@@ -52,12 +53,17 @@ public:
   };
 
   /*!
-    Record a new keyframe with id \e keyframeId (must be the next id: size of the keyframe list).
+    Record a new keyframe with id \e keyframeId (must be the next id: first id + size of the keyframe list).
     \exception vpHSlamException::invalidArgument when ids are not consecutive.
   */
   void addKeyframe(int keyframeId, int frameIndex, double timestamp, const SE3d &wMc, unsigned int segment);
   //! New pose (and window membership) of a keyframe; unknown ids are ignored.
   void updateKeyframe(int keyframeId, const SE3d &wMc);
+  /*!
+    Id of the first keyframe to be recorded (0 unless a loaded map took the lower ids); only before any keyframe is
+    recorded. clear() sets it back to 0.
+  */
+  void setFirstKeyframeId(int id);
   void setKeyframeInWindow(int keyframeId, bool inWindow, unsigned int activePoints);
   /*!
     Loop correction of keyframes whose map was scaled: each keyframe id gets its new pose, and the frames tracked
@@ -86,7 +92,7 @@ public:
   size_t frameCount() const;
   //! Keyframes recorded and not discarded.
   size_t keyframeCount() const;
-  //! Every keyframe record, discarded ones included (index = keyframe id).
+  //! Every keyframe record, discarded ones included (in id order).
   std::vector<KeyframeRecord> keyframes() const;
 
   //! Every frame (\e segment < 0) or one segment's frames, as camera-to-world poses, in frame index order.
@@ -98,9 +104,13 @@ public:
 
 private:
   SE3d worldPoseLocked(const FrameRecord &f) const;
+  //! Record of keyframe \e id, null when not recorded.
+  KeyframeRecord *findLocked(int id);
+  const KeyframeRecord *findLocked(int id) const;
 
   mutable std::mutex m_mutex;
-  std::vector<KeyframeRecord> m_keyframes;
+  std::vector<KeyframeRecord> m_keyframes; //!< keyframe id m_firstId + i at index i
+  int m_firstId = 0;
   std::vector<FrameRecord> m_frames;
   std::vector<int> m_frameSlot; //!< frame index -> position in m_frames, -1 when absent
 };

@@ -67,6 +67,16 @@ std::vector<vpHSlam::GraphEdge> vpHSlam::getGraphEdges() const
   return m_system->graphEdges();
 }
 
+void vpHSlam::saveMap(const std::string &path)
+{
+  m_system->saveMap(path);
+}
+
+void vpHSlam::loadMap(const std::string &path)
+{
+  m_system->loadMap(path);
+}
+
 vpHSlamTrajectory vpHSlam::getTrajectory(int segment) const
 {
   return m_system->trajectory(segment);

@@ -238,6 +238,29 @@ public:
   //! Forget everything (map, trajectory, statistics) and start again with the next frame.
   void reset();
 
+  /*!
+    Write the map to \e path (H-SLAM's versioned binary map file, format in the source's map/MapFile.h): every
+    keyframe kept (pose, affine brightness, points in inverse-depth form with variance, ORB descriptor and
+    observers), the pose-pose edges, the rectified camera and the vocabulary's fingerprint. The window's keyframes
+    are written as if marginalised now; the running system is not changed. In real-time mode, waits for mapping
+    first. The file is written to a temporary name and renamed, so an interrupted save leaves the old file whole.
+    \exception vpHSlamException : invalidArgument in vo-strict mode (no map is kept) or before the first keyframe;
+    fileUnreadable when the file cannot be written.
+  */
+  void saveMap(const std::string &path);
+
+  /*!
+    Read a map written by saveMap() and make it the global map, before the first frame (or right after reset()).
+    The loaded keyframes keep their own map segments: the next frames start a new segment, which re-use and loop
+    detection keep apart from the loaded coordinates; getMapPoints(), getGraphEdges() and a later saveMap() include
+    the loaded map. (Tracking inside a loaded map, localisation-only, is not implemented yet.)
+    \exception vpHSlamException : fileNotFound / fileUnreadable; parseError for a file that is not a map, truncated
+    or corrupt (checksum); unsupported for another format version or a different vocabulary; invalidCalibration
+    when the map was built with another rectified camera; invalidArgument in vo-strict mode or after frames were
+    tracked.
+  */
+  void loadMap(const std::string &path);
+
   //! The pinhole camera of the rectified images the system works in.
   vpCameraParameters getCameraParameters() const;
   //! Rectified image width, pixels.

@@ -1,0 +1,72 @@
+/*
+ * H-SLAM for ViSP.
+ */
+// LocalMapper, map file part: the map as a file holds it (vpHSlam::saveMap) and a loaded map made the global map
+// (vpHSlam::loadMap). The file format is map/MapFile.h.
+#include "system/LocalMapper.h"
+
+#include "system/LocalMapperImpl.h"
+
+#include <algorithm>
+#include <set>
+
+namespace hslam
+{
+void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges)
+{
+  Impl &m = *m_impl;
+  keyframes.clear();
+  edges = m_globalMap.posePoseEdges();
+  for (const auto &entry : m_globalMap.keyframes()) {
+    keyframes.push_back(entry.second);
+  }
+  for (const KeyframePtr &kf : m_window) {
+    keyframes.push_back(leanKeyframe(*kf, true));
+    // Each window pair once: from the older keyframe to the newer one.
+    std::vector<PairInformation> pairs = m.optimizer.pairInformation(kf->id());
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&kf](const PairInformation &p) { return p.otherKeyframeId < kf->id(); }),
+                pairs.end());
+    for (const PosePoseEdge &e : posePoseEdges(*kf, pairs)) {
+      if (e.to > e.from) { // a link back in time is the older window keyframe's link forward
+        edges.push_back(e);
+      }
+    }
+  }
+  // A segment whose window was dropped (tracking lost) leaves observers and edges naming keyframes nobody holds.
+  std::set<int> held;
+  for (const GlobalKeyframe &kf : keyframes) {
+    held.insert(kf.id);
+  }
+  for (GlobalKeyframe &kf : keyframes) {
+    for (GlobalPoint &p : kf.points) {
+      p.observers.erase(
+          std::remove_if(p.observers.begin(), p.observers.end(), [&held](int id) { return held.count(id) == 0; }),
+          p.observers.end());
+    }
+  }
+  edges.erase(std::remove_if(edges.begin(), edges.end(),
+                             [&held](const PosePoseEdge &e) { return !held.count(e.from) || !held.count(e.to); }),
+              edges.end());
+}
+
+void LocalMapper::restoreMap(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
+{
+  int lastSegment = -1;
+  for (const GlobalKeyframe &kf : keyframes) {
+    lastSegment = std::max(lastSegment, kf.segment);
+  }
+  m_globalMap.restore(std::move(keyframes), std::move(edges));
+  m_segment = std::max(m_segment, lastSegment + 1);
+}
+
+void LocalMapper::reset()
+{
+  clear();
+  m_globalMap.clear();
+  m_reuse = ReuseStatistics();
+  m_loops = LoopStatistics();
+  m_loopEdges.clear();
+  m_segment = 0;
+}
+} // namespace hslam

@@ -1,0 +1,183 @@
+// Map files through vpHSlam (issue 10, save/load): a map saved after a synthetic run holds every keyframe and the
+// temporal chain of pose-pose edges; loaded into a new system it is the global map (points and edges shown) and
+// stays inert while the new system tracks (its own segment: the trajectory is the same as without it); a map saved
+// after that holds both runs. Misuse and foreign maps give clear errors; reset() forgets a loaded map.
+#include "HSlamTestData.h"
+#include "HSlamTestErrors.h"
+#include "SystemTestUtils.h"
+
+#include "map/MapFile.h"
+
+#include <visp3/hslam/vpHSlam.h>
+#include <visp3/hslam/vpHSlamVocabulary.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <iostream>
+#include <iterator>
+#include <map>
+#include <set>
+
+namespace
+{
+constexpr unsigned int kWidth = 320, kHeight = 240, kFrames = 200;
+
+vpHSlamParameters reuseParameters()
+{
+  vpHSlamParameters params;
+  params.system.deterministic = true;
+  params.system.mode = vpHSlamParameters::modeVoReuse;
+  params.tracking.mode = vpHSlamParameters::trackingHybrid; // as the global map test: every frame tracked
+  return params;
+}
+
+void track(vpHSlam &slam, const vpHSlamSyntheticScene &scene, unsigned int frames)
+{
+  vpImage<unsigned char> I;
+  for (unsigned int i = 0; i < frames; ++i) {
+    scene.render(i, I);
+    slam.track(I, scene.getTimestamp(i));
+  }
+}
+
+size_t storedPoints(const hslam::MapSnapshot &map)
+{
+  size_t n = 0;
+  for (const hslam::GlobalKeyframe &kf : map.keyframes) {
+    for (const hslam::GlobalPoint &p : kf.points) {
+      n += p.state == hslam::GlobalPointState::stored ? 1u : 0u;
+    }
+  }
+  return n;
+}
+
+class SystemMapFile : public ::testing::Test
+{
+protected:
+  void SetUp() override
+  {
+    m_dir = std::filesystem::temp_directory_path() /
+            ("hslam-system-map-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    std::filesystem::create_directories(m_dir);
+  }
+  void TearDown() override { std::filesystem::remove_all(m_dir); }
+  std::string path(const std::string &name) const { return (m_dir / name).string(); }
+
+  std::filesystem::path m_dir;
+};
+} // namespace
+
+TEST_F(SystemMapFile, SavedMapReloadsInertAndAccumulatesRuns)
+{
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  vpHSlamSyntheticScene scene;
+  scene.configure(kWidth, kHeight, kFrames, 30., 3);
+  const vpHSlamParameters params = reuseParameters();
+
+  vpHSlam first(hslam_test::syntheticCamera(scene), params);
+  track(first, scene, kFrames);
+  const vpHSlam::Statistics s = first.getStatistics();
+  std::cout << "first run: " << s.trackedFrames << "/" << kFrames << " frames tracked, " << s.segments
+            << " segment(s), " << s.keyframesHeld << " keyframes held" << std::endl;
+  ASSERT_EQ(s.trackedFrames, kFrames);
+  ASSERT_GT(s.marginalizedKeyframes, 3u);
+  first.saveMap(path("first.hmap"));
+
+  // Everything held is in the file: stored keyframes and the window's, linked in time by pose-pose edges.
+  const hslam::MapSnapshot saved = hslam::loadMapFile(path("first.hmap"));
+  EXPECT_EQ(saved.keyframes.size(), s.keyframesHeld);
+  EXPECT_EQ(saved.camera.width, static_cast<int>(kWidth));
+  std::set<int> ids;
+  for (const hslam::GlobalKeyframe &kf : saved.keyframes) {
+    ids.insert(kf.id);
+  }
+  std::map<std::pair<int, int>, int> links; // (older, newer) -> consecutive edges between them
+  for (const hslam::PosePoseEdge &e : saved.edges) {
+    if (e.consecutive) {
+      ++links[std::make_pair(std::min(e.from, e.to), std::max(e.from, e.to))];
+    }
+  }
+  for (auto it = ids.begin(); std::next(it) != ids.end(); ++it) {
+    EXPECT_EQ((links[std::make_pair(*it, *std::next(it))]), 1)
+        << "keyframes " << *it << " and " << *std::next(it) << " are not linked once in time";
+  }
+
+  // Loaded into a new system: the global map, shown before any frame.
+  vpHSlam second(hslam_test::syntheticCamera(scene), params);
+  second.loadMap(path("first.hmap"));
+  EXPECT_EQ(second.getMapPoints().size(), storedPoints(saved));
+  size_t posePose = 0;
+  for (const vpHSlam::GraphEdge &e : second.getGraphEdges()) {
+    posePose += e.covisibility ? 0u : 1u;
+  }
+  EXPECT_EQ(posePose, saved.edges.size());
+
+  // Tracking the same frames: the loaded map is another segment, so the new trajectory is the one of the first run.
+  track(second, scene, kFrames);
+  const vpHSlamTrajectory firstTrajectory = first.getTrajectory(), secondTrajectory = second.getTrajectory();
+  const std::vector<vpHomogeneousMatrix> &a = firstTrajectory.getPoses();
+  const std::vector<vpHomogeneousMatrix> &b = secondTrajectory.getPoses();
+  ASSERT_EQ(a.size(), b.size());
+  double largest = 0.;
+  for (size_t i = 0; i < a.size(); ++i) {
+    for (unsigned int r = 0; r < 3; ++r) {
+      for (unsigned int c = 0; c < 4; ++c) {
+        largest = std::max(largest, std::fabs(a[i][r][c] - b[i][r][c]));
+      }
+    }
+  }
+  EXPECT_LT(largest, 1e-9) << "the loaded map changed how the new run was tracked";
+
+  // Saved again: both runs, in different segments, with distinct keyframe ids.
+  second.saveMap(path("both.hmap"));
+  const hslam::MapSnapshot both = hslam::loadMapFile(path("both.hmap"));
+  EXPECT_EQ(both.keyframes.size(), 2 * saved.keyframes.size());
+  std::set<int> bothIds, segments;
+  for (const hslam::GlobalKeyframe &kf : both.keyframes) {
+    bothIds.insert(kf.id);
+    segments.insert(kf.segment);
+  }
+  EXPECT_EQ(bothIds.size(), both.keyframes.size());
+  EXPECT_EQ(segments.size(), 2u);
+  std::cout << "saved " << saved.keyframes.size() << " keyframes, " << storedPoints(saved) << " stored points, "
+            << saved.edges.size() << " pose-pose edges, " << std::filesystem::file_size(path("first.hmap"))
+            << " bytes; with the second run " << both.keyframes.size() << " keyframes" << std::endl;
+
+  // reset() forgets the loaded map with everything else.
+  second.reset();
+  EXPECT_TRUE(second.getMapPoints().empty());
+  EXPECT_TRUE(second.getGraphEdges().empty());
+
+  // Misuse and foreign maps.
+  using hslam_test::expectHSlamError;
+  expectHSlamError([&]() { first.loadMap(path("first.hmap")); }, vpHSlamException::invalidArgument,
+                   {"before the first frame"});
+  vpHSlamParameters strict = params;
+  strict.system.mode = vpHSlamParameters::modeVoStrict;
+  vpHSlam strictSlam(hslam_test::syntheticCamera(scene), strict);
+  expectHSlamError([&]() { strictSlam.saveMap(path("strict.hmap")); }, vpHSlamException::invalidArgument,
+                   {"vo-strict"});
+  expectHSlamError([&]() { strictSlam.loadMap(path("first.hmap")); }, vpHSlamException::invalidArgument, {"vo-strict"});
+  vpHSlam empty(hslam_test::syntheticCamera(scene), params);
+  expectHSlamError([&]() { empty.saveMap(path("empty.hmap")); }, vpHSlamException::invalidArgument, {"no map to save"});
+  EXPECT_FALSE(std::filesystem::exists(path("empty.hmap")));
+  vpHSlamSyntheticScene other;
+  other.configure(2 * kWidth, 2 * kHeight, kFrames, 30., 3);
+  vpHSlam otherCamera(hslam_test::syntheticCamera(other), params);
+  expectHSlamError([&]() { otherCamera.loadMap(path("first.hmap")); }, vpHSlamException::invalidCalibration,
+                   {"another camera", "320x240", "640x480"});
+  // A map indexed with another vocabulary, in a mode that loads one (slam) when the shipped one is found.
+  vpHSlamParameters slamParams = params;
+  slamParams.system.mode = vpHSlamParameters::modeSlam;
+  vpHSlam slam(hslam_test::syntheticCamera(scene), slamParams);
+  hslam::MapSnapshot foreign = saved;
+  foreign.vocabularyId = 0x1234;
+  hslam::saveMapFile(path("foreign.hmap"), foreign);
+  if (!vpHSlamVocabulary::defaultPath().empty()) {
+    expectHSlamError([&]() { slam.loadMap(path("foreign.hmap")); }, vpHSlamException::unsupported,
+                     {"vocabulary 0000000000001234"});
+  }
+}
