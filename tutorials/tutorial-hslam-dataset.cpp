@@ -75,7 +75,7 @@ void installTerminationHandlers()
 }
 
 //! Write every requested output; report (do not throw) failures so that each file gets its chance.
-bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &outcome)
+bool writeOutputs(const Arguments &args, vpHSlam &slam, const RunOutcome &outcome)
 {
   bool ok = true;
   auto attempt = [&](const std::string &what, const std::function<void()> &write) {
@@ -112,6 +112,9 @@ bool writeOutputs(const Arguments &args, const vpHSlam &slam, const RunOutcome &
       attempt(args.mapPng, [&]() { writeMapPng(args.mapPng, points, slam.getTrajectory()); });
     }
   }
+  if (!args.saveMap.empty()) {
+    attempt(args.saveMap, [&]() { slam.saveMap(args.saveMap); });
+  }
   return ok;
 }
 
@@ -130,6 +133,11 @@ int run(const Arguments &args)
   std::cout << "source: " << source->describe() << std::endl;
   std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
   vpHSlam slam(*source, params);
+  if (!args.loadMap.empty()) {
+    slam.loadMap(args.loadMap);
+    std::cout << "map: " << args.loadMap << " loaded"
+              << (params.system.localizationOnly ? ", localisation only (the map is not changed)" : "") << std::endl;
+  }
   std::cout << "mode: " << vpHSlamParameters::modeName(params.system.mode) << ", "
             << vpHSlamParameters::trackingModeName(params.tracking.mode) << " tracking"
             << (params.system.deterministic ? ", deterministic" : ", real time") << "; rectified " << slam.getWidth()

@@ -116,8 +116,7 @@ MapSnapshot sampleMap(int keyframes, int pointsPerKeyframe, unsigned seed)
 
 void expectSamePose(const SE3d &a, const SE3d &b)
 {
-  // SE3 normalises the quaternion it is built from: at most an ulp or two on an already unit quaternion.
-  EXPECT_NEAR(a.unitQuaternion().angularDistance(b.unitQuaternion()), 0., 1e-15);
+  EXPECT_EQ(a.unitQuaternion().coeffs(), b.unitQuaternion().coeffs());
   EXPECT_EQ(a.translation(), b.translation());
 }
 

@@ -103,8 +103,9 @@ void printUsage(const char *program, std::ostream &out)
          "X]\n"
          "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
          "[--keyframes OUT.txt]\n"
-         "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--skip-unreadable] [--log-level LEVEL] "
-         "[--quiet] [--no-display]\n"
+         "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--save-map OUT.hmap] [--load-map "
+         "MAP.hmap]\n"
+         "       [--localization-only] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
          "       [--screenshot FILE.png] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
@@ -152,6 +153,13 @@ void printUsage(const char *program, std::ostream &out)
          "                     global_points, reactivated_points_per_keyframe, window_share_from_global), ...\n"
          "  --map-ply FILE     the map as a PLY point cloud: active points orange, global map grey, keyframes red\n"
          "  --map-png FILE     top view of the map points and the trajectory (PNG)\n"
+         "  --save-map FILE    the map at the end (H-SLAM map file: keyframes, points, descriptors, graph);\n"
+         "                     needs --mode vo-reuse or slam\n"
+         "  --load-map FILE    a map saved by --save-map, loaded before the first frame: without\n"
+         "                     --localization-only it is kept beside the new run's map (its own segment)\n"
+         "  --localization-only  locate every frame in the --load-map map (ORB matches, PnP, pose-only\n"
+         "                     refinement against its keyframes) without initialising, mapping or changing it;\n"
+         "                     the trajectory is in the loaded map's coordinates, unlocated frames are lost\n"
          "  --skip-unreadable  an image that cannot be read or decoded is reported, counted as dropped (in the\n"
          "                     summary and the statistics) and skipped; tracking carries on with the next frame.\n"
          "                     Without it (default), the run stops at that image with an error naming it. The run\n"
@@ -228,6 +236,12 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.mapPly = value();
     } else if (option == "--map-png") {
       args.mapPng = value();
+    } else if (option == "--save-map") {
+      args.saveMap = value();
+    } else if (option == "--load-map") {
+      args.loadMap = value();
+    } else if (option == "--localization-only") {
+      args.localizationOnly = true;
     } else if (option == "--log-level") {
       args.logLevel = value();
     } else if (option == "--quiet") {
@@ -244,6 +258,10 @@ Arguments parseArguments(int argc, const char *const argv[])
   }
   if (!args.help && args.input.empty()) {
     throw vpHSlamException(vpHSlamException::invalidArgument, "--input PATH is required (see --help)");
+  }
+  if (!args.help && args.localizationOnly && args.loadMap.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--localization-only needs a map to locate frames in: --load-map FILE");
   }
   return args;
 }
@@ -283,6 +301,9 @@ vpHSlamParameters makeParameters(const Arguments &args)
   }
   if (args.deterministic) {
     params.system.deterministic = true;
+  }
+  if (args.localizationOnly) {
+    params.system.localizationOnly = true;
   }
   params.validate();
   return params;

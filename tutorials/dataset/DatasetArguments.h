@@ -42,8 +42,11 @@ struct Arguments {
   std::string trajectory;
   std::string keyframes;
   std::string stats;
-  std::string mapPly; //!< --map-ply: the map as a PLY point cloud
-  std::string mapPng; //!< --map-png: top view of map and trajectory
+  std::string mapPly;            //!< --map-ply: the map as a PLY point cloud
+  std::string mapPng;            //!< --map-png: top view of map and trajectory
+  std::string saveMap;           //!< --save-map: the map file at the end (vpHSlam::saveMap)
+  std::string loadMap;           //!< --load-map: a map file loaded before the first frame (vpHSlam::loadMap)
+  bool localizationOnly = false; //!< --localization-only: locate frames in the loaded map, never change it
   std::string saveConfig;
   std::string logLevel = "warning";
   bool display = true;

@@ -180,6 +180,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(system, workerThreads, atLeast(0), "threads for residual accumulation (0 = caller only)"),
   HSLAM_PARAM(system, usePhotometricCalibration, anyValue(), "use G, V, exposure when the source has them"),
   HSLAM_PARAM(system, maxTrackingFailures, atLeast(0), "failed alignments in a row before tracking is lost"),
+  HSLAM_PARAM(system, localizationOnly, anyValue(), "locate frames in a loaded map (loadMap), never change it"),
 };
 // clang-format on
 #undef HSLAM_PARAM

@@ -27,6 +27,8 @@ constexpr std::uint8_t kFlagCorner = 1;
 constexpr std::uint8_t kFlagHasOrb = 2;
 //! A stored quaternion must be unit to this tolerance on its squared norm (it was written normalised).
 constexpr double kUnitQuaternionTolerance = 1e-6;
+//! Within this, the stored quaternion is the unit one that was written (a few ulps of the squared norm).
+constexpr double kExactUnitTolerance = 1e-14;
 
 void writePose(ByteWriter &w, const SE3d &T)
 {
@@ -58,7 +60,9 @@ SE3d readPose(ByteReader &r, const std::string &path, const char *what)
   if (std::fabs(q.squaredNorm() - 1.) > kUnitQuaternionTolerance) {
     corrupt(path, std::string(what) + " rotation is not a unit quaternion");
   }
-  return SE3d(q, Eigen::Vector3d(v[4], v[5], v[6]));
+  // Written unit by this format: kept as read (exact round trip); a quaternion a little off is normalised.
+  const Eigen::Vector3d t(v[4], v[5], v[6]);
+  return std::fabs(q.squaredNorm() - 1.) <= kExactUnitTolerance ? SE3d::fromUnitQuaternion(q, t) : SE3d(q, t);
 }
 
 double finite(double x, const std::string &path, const char *what)

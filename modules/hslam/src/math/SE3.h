@@ -60,6 +60,18 @@ public:
     m_q.normalize();
   }
 
+  /*!
+    From a quaternion the caller knows to be unit (read back from a file that stored a unit one): kept bit for bit,
+    so that a pose written and read again is the same pose. Anything else goes through the normalising constructor.
+  */
+  static SE3 fromUnitQuaternion(const Quat &q, const Vec3 &t)
+  {
+    SE3 T;
+    T.m_q = q;
+    T.m_t = t;
+    return T;
+  }
+
   //! From a rotation matrix (assumed orthonormal, see ViSPConversions.h to repair one) and a translation.
   SE3(const Mat3 &R, const Vec3 &t) : SE3(Quat(R), t) {}
 

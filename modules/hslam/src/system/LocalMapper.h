@@ -39,6 +39,7 @@
 namespace hslam
 {
 class CoarseTracker;
+struct ReferenceFeature;
 class OrbVocabulary;
 struct TwoViewInitialization;
 struct RelocalizationKeyframe;
@@ -176,7 +177,20 @@ public:
     Keyframes of the segment most similar to a lost frame (BoW), best first, with their points (world) and direct
     index; the frame's direct index is filled on the way.
   */
-  std::vector<RelocalizationKeyframe> relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates) const;
+  std::vector<RelocalizationKeyframe> relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates,
+                                                               int preferred = -1) const;
+  /*!
+    Index every keyframe of the global map for relocalisation (localisation-only in a loaded map): BoW vector of its
+    described points, corners with their world positions. False without a vocabulary.
+  */
+  bool indexGlobalMap();
+  /*!
+    Localisation-only: the stored points of keyframe \e id, of its neighbours in time and of its co-visible
+    keyframes, in world coordinates (ReferenceFeature::Xref is the world position), with the ids of those keyframes.
+  */
+  void localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const;
+  //! Of \e keyframeIds, the stored keyframe whose camera is closest to \e cMw (centre distance; -1 when none).
+  int closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const;
 
 private:
   void traceAll(const Frame &frame);

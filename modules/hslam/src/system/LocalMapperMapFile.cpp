@@ -33,6 +33,9 @@ void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vecto
       }
     }
   }
+  // In id order whatever left the window first: the same map always gives the same file.
+  std::sort(keyframes.begin(), keyframes.end(),
+            [](const GlobalKeyframe &a, const GlobalKeyframe &b) { return a.id < b.id; });
   // A segment whose window was dropped (tracking lost) leaves observers and edges naming keyframes nobody holds.
   std::set<int> held;
   for (const GlobalKeyframe &kf : keyframes) {

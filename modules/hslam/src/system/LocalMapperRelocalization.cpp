@@ -57,13 +57,96 @@ double LocalMapper::descriptorBytesPerKeyframe() const
   return bytes;
 }
 
+bool LocalMapper::indexGlobalMap()
+{
+  Impl &m = *m_impl;
+  if (!m.relocalization) {
+    return false;
+  }
+  for (const auto &entry : m_globalMap.keyframes()) {
+    const GlobalKeyframe &kf = entry.second;
+    if (kf.culled) {
+      continue; // as when the map was built: a culled keyframe left the database
+    }
+    std::vector<OrbDescriptor> described;
+    std::vector<Eigen::Vector3d> wX;
+    std::vector<OrbDescriptor> corners;
+    const SE3d wMc = kf.cMw.inverse();
+    for (const GlobalPoint &p : kf.points) {
+      if (!p.hasOrb) {
+        continue;
+      }
+      described.push_back(p.orb);
+      if (p.state == GlobalPointState::stored && p.idepth > 0.f) {
+        const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
+        wX.push_back(wMc * (ray / static_cast<double>(p.idepth)));
+        corners.push_back(p.orb);
+      }
+    }
+    m.relocalization->addKeyframe(kf.id, described);
+    m.relocalization->setKeyframePoints(kf.id, std::move(wX), std::move(corners));
+  }
+  return true;
+}
+
+void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const
+{
+  const Impl &m = *m_impl;
+  features.clear();
+  keyframeIds.clear();
+  std::vector<int> ids = m_globalMap.covisibleWith(id);
+  for (int n = id - kRelocalizationNeighbours; n <= id + kRelocalizationNeighbours; ++n) {
+    ids.push_back(n);
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  for (int n : ids) {
+    const GlobalKeyframe *kf = m_globalMap.find(n);
+    if (!kf || kf->culled) {
+      continue;
+    }
+    keyframeIds.push_back(n);
+    const SE3d wMc = kf->cMw.inverse();
+    for (const GlobalPoint &p : kf->points) {
+      if (!p.hasOrb || p.state != GlobalPointState::stored || !(p.idepth > 0.f)) {
+        continue;
+      }
+      ReferenceFeature f;
+      f.Xref = wMc * (Eigen::Vector3d((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.) /
+                      static_cast<double>(p.idepth));
+      f.orb = p.orb;
+      f.angleDeg = p.orbAngleDeg;
+      features.push_back(f);
+    }
+  }
+}
+
+int LocalMapper::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const
+{
+  const Eigen::Vector3d centre = cMw.inverse().translation();
+  int best = -1;
+  double bestDistance = 0.;
+  for (int id : keyframeIds) {
+    const GlobalKeyframe *kf = m_globalMap.find(id);
+    if (!kf) {
+      continue;
+    }
+    const double d = (kf->cMw.inverse().translation() - centre).norm();
+    if (best < 0 || d < bestDistance) {
+      best = id;
+      bestDistance = d;
+    }
+  }
+  return best;
+}
+
 bool LocalMapper::indexesKeyframes() const
 {
   return m_impl->relocalization != nullptr;
 }
 
-std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(RelocalizationFrame &frame,
-                                                                          int maxCandidates) const
+std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates,
+                                                                          int preferred) const
 {
   const Impl &m = *m_impl;
   std::vector<RelocalizationKeyframe> out;
@@ -72,7 +155,11 @@ std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(Reloca
   }
   BowVector bow;
   m.relocalization->describeFrame(frame, bow);
-  for (int id : m.relocalization->candidates(bow, maxCandidates)) {
+  std::vector<int> ids = m.relocalization->candidates(bow, maxCandidates);
+  if (preferred >= 0 && std::find(ids.begin(), ids.end(), preferred) == ids.end()) {
+    ids.insert(ids.begin(), preferred); // the caller's guess (the keyframe that placed the previous frame) first
+  }
+  for (int id : ids) {
     // The candidate and its neighbours in time (they see the same place; a keyframe alone hosts few points).
     RelocalizationKeyframe k;
     k.id = id;

@@ -42,7 +42,7 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
   // The vocabulary: relocalisation (hybrid / indirect tracking) and loop detection (slam mode).
   if ((m_params.tracking.mode != vpHSlamParameters::trackingDirect && m_params.tracking.relocalize) ||
-      m_params.system.mode == vpHSlamParameters::modeSlam) {
+      m_params.system.mode == vpHSlamParameters::modeSlam || m_params.system.localizationOnly) {
     const std::string path = vpHSlamVocabulary::defaultPath();
     if (path.empty()) {
       VP_HSLAM_LOG(vpHSlamLog::warning, "no vocabulary found (set HSLAM_VOCABULARY to a vocabulary file): "
@@ -54,7 +54,7 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                            m_preprocessor.height(), calibrated,
                                            m_vocabulary ? &m_vocabulary->impl() : nullptr);
-  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect) {
+  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect || m_params.system.localizationOnly) {
     m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                                m_preprocessor.height());
   }
@@ -85,6 +85,10 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
         << " does not increase (previous " << m_lastTimestamp << " s)";
     throw vpHSlamException(vpHSlamException::invalidTimestamps, msg.str());
   }
+  if (m_params.system.localizationOnly && !m_localizationReady) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           where(__LINE__) + "system.localizationOnly: load a map (loadMap) before the first frame");
+  }
   const double t0 = nowMs();
   m_frameStartMs = t0;
   const double c0 = threadCpuMs();
@@ -99,7 +103,10 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
     m_lastImage = frame->raw;
   }
   vpHSlam::State state;
-  if (!m_initialized) {
+  if (m_params.system.localizationOnly) {
+    state = localizeInLoadedMap(frame);
+    m_cpuTrack += threadCpuMs() - c1;
+  } else if (!m_initialized) {
     state = initialize(frame, I, exposure);
     m_runStats.addInitializationMs(nowMs() - t0);
     m_cpuInitialize += threadCpuMs() - c1;
@@ -559,6 +566,8 @@ void SlamSystem::reset()
   m_relocalizing = false;
   m_relocAttempts = 0;
   m_relocSuccesses = 0;
+  m_localizationReady = false; // the loaded map went with the rest
+  m_localizedKeyframe = -1;
   std::lock_guard<std::mutex> lock(m_imageMutex);
   m_lastImage.resize(0, 0);
 }

@@ -93,6 +93,8 @@ public:
   const vpHSlamParameters &parameters() const { return m_params; }
 
 private:
+  //! localisation-only: the frame placed in the loaded map by relocalisation against its keyframes (no map change).
+  vpHSlam::State localizeInLoadedMap(const FramePtr &frame);
   //! The rectified camera, as map files record it.
   MapCamera mapCamera() const;
   //! Throws when the mode keeps no global map (vo-strict): \e operation names the call in the message.
@@ -165,8 +167,10 @@ private:
   AffineBrightness m_lastAffine; //!< (a, b) of the last tracked frame
   int m_framesSinceKeyframeRequest = 0;
   int m_consecutiveFailures = 0;
-  bool m_relocalizing = false; //!< tracking failed: lost frames try relocalisation until it works or times out
-  double m_lostSince = 0.;     //!< timestamp of the first frame of the current relocalisation attempt, seconds
+  bool m_localizationReady = false; //!< localisation-only: a map is loaded and indexed
+  int m_localizedKeyframe = -1;     //!< localisation-only: keyframe that placed the last located frame
+  bool m_relocalizing = false;      //!< tracking failed: lost frames try relocalisation until it works or times out
+  double m_lostSince = 0.;          //!< timestamp of the first frame of the current relocalisation attempt, seconds
   bool m_initialized = false;
   unsigned int m_segment = 0;
   SE3d m_segmentOrigin;                          //!< wMc given to the first keyframe of the current segment

@@ -59,7 +59,7 @@ MapCamera SlamSystem::mapCamera() const
 
 void SlamSystem::requireGlobalMap(const std::string &path, const char *operation) const
 {
-  if (m_params.system.mode == vpHSlamParameters::modeVoStrict) {
+  if (m_params.system.mode == vpHSlamParameters::modeVoStrict && !m_params.system.localizationOnly) {
     throw vpHSlamException(vpHSlamException::invalidArgument,
                            path + ": " + operation +
                                " needs system.mode vo-reuse or slam (vo-strict discards the keyframes that leave the "
@@ -115,7 +115,15 @@ void SlamSystem::loadMap(const std::string &path)
   {
     std::lock_guard<std::mutex> lock(m_mapperMutex);
     m_mapper->restoreMap(std::move(map.keyframes), std::move(map.edges));
+    // Localisation-only searches the loaded keyframes; otherwise they stay out of the relocalisation index, which
+    // holds the current segment's keyframes only (their coordinates are not the loaded map's).
+    if (m_params.system.localizationOnly && !m_mapper->indexGlobalMap()) {
+      throw vpHSlamException(vpHSlamException::unsupported,
+                             path + ": system.localizationOnly needs a vocabulary (none found: set HSLAM_VOCABULARY)");
+    }
   }
+  m_localizationReady = m_params.system.localizationOnly;
+  m_localizedKeyframe = -1;
   // New keyframes are numbered after the loaded ones: ids stay unique in the global map and in a saved map.
   m_keyframeCount = std::max(m_keyframeCount.load(), lastId + 1);
   m_recorder.setFirstKeyframeId(m_keyframeCount.load());

@@ -192,6 +192,7 @@ public:
     int workerThreads = 0;                 //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
     int maxTrackingFailures = 3;           //!< failed alignments in a row (pose predicted, DSO) before tracking is lost
+    bool localizationOnly = false;         //!< locate each frame in a loaded map (vpHSlam::loadMap), never change it
   };
 
   Features features;       //!< point selection

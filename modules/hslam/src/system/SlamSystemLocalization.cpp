@@ -1,0 +1,97 @@
+/*
+ * H-SLAM for ViSP.
+ */
+// Localisation-only (SlamSystem, system.localizationOnly): every frame is placed in a loaded map. While the
+// previous frame was placed, the stored points around its keyframe are tracked (constant-velocity prediction,
+// guided ORB matching, pose-only refinement: the indirect step of hybrid tracking); otherwise place recognition
+// and PnP relocalise the frame. Nothing is initialised, mapped or stored: the map stays exactly as loaded. Frames are
+// recorded anchored to the world (no keyframe of this run), so getTrajectory() is in the loaded map's coordinates.
+#include "system/SlamSystem.h"
+
+#include "system/LocalMapper.h"
+#include "tracking/Relocalizer.h"
+
+#include <visp3/hslam/vpHSlamLog.h>
+
+namespace hslam
+{
+vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
+{
+  const double t0 = m_frameStartMs;
+  m_hybrid->extract(frame->raw);
+  bool located = false;
+  SE3d cMw;
+  const char *how = "";
+  int inliers = 0;
+
+  // Tracking in the map: the points around the keyframe that placed the previous frame, projected with the
+  // constant-velocity prediction and matched by ORB (the indirect step of hybrid tracking, the world as reference).
+  SE3d wMlast, wMprelast;
+  if (m_localizedKeyframe >= 0 && m_lastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast)) {
+    CoarseMotionHistory history;
+    history.valid = true;
+    history.lastMref = wMlast.inverse();
+    history.prelastMref = m_prelastFrameId >= 0 && m_recorder.framePose(m_prelastFrameId, wMprelast)
+                              ? wMprelast.inverse()
+                              : history.lastMref;
+    std::vector<ReferenceFeature> features;
+    std::vector<int> keyframeIds;
+    {
+      std::lock_guard<std::mutex> lock(m_mapperMutex);
+      m_mapper->localMapFeatures(m_localizedKeyframe, features, keyframeIds);
+    }
+    IndirectStepResult step;
+    if (m_hybrid->indirectStep(features, CoarseTracker::predictConstantVelocity(history), step) &&
+        step.inliers >= m_params.tracking.relocalizationMinInliers) {
+      located = true;
+      cMw = step.newMref;
+      inliers = step.inliers;
+      how = "tracked in the map";
+      std::lock_guard<std::mutex> lock(m_mapperMutex);
+      const int closest = m_mapper->closestKeyframe(cMw, keyframeIds);
+      m_localizedKeyframe = closest >= 0 ? closest : m_localizedKeyframe;
+    }
+  }
+
+  // Otherwise (first frame, or the prediction lost the map): place recognition and PnP, as relocalisation.
+  if (!located) {
+    RelocalizationFrame f = m_hybrid->relocalizationFrame();
+    if (!f.descriptors.empty()) {
+      std::vector<RelocalizationKeyframe> candidates;
+      {
+        std::lock_guard<std::mutex> lock(m_mapperMutex);
+        candidates =
+            m_mapper->relocalizationCandidates(f, m_params.tracking.relocalizationCandidates, m_localizedKeyframe);
+      }
+      std::vector<const RelocalizationKeyframe *> pointers;
+      for (const RelocalizationKeyframe &k : candidates) {
+        pointers.push_back(&k);
+      }
+      RelocalizerOptions options;
+      options.minInliers = m_params.tracking.relocalizationMinInliers;
+      ++m_relocAttempts;
+      const RelocalizationResult r = relocalize(f, pointers, m_preprocessor.intrinsics(), options);
+      if (r.success) {
+        ++m_relocSuccesses;
+        located = true;
+        cMw = r.cTw;
+        inliers = r.inliers;
+        how = "relocalised";
+        m_localizedKeyframe = r.keyframeId;
+      }
+    }
+  }
+  m_runStats.addTrackingMs(nowMs() - t0);
+  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": localisation " << (located ? how : "failed") << ", "
+                                           << inliers << " inliers, keyframe " << m_localizedKeyframe);
+  if (!located) {
+    m_localizedKeyframe = -1;
+    m_lastFrameId = m_prelastFrameId = -1;
+    return vpHSlam::stateLost;
+  }
+  m_recorder.addFrame(frame->id, frame->timestamp, -1, cMw.inverse(), m_segment);
+  m_prelastFrameId = m_lastFrameId;
+  m_lastFrameId = frame->id;
+  return vpHSlam::stateTracking;
+}
+} // namespace hslam
