@@ -20,11 +20,16 @@
 #           blur, exposure changes, vignette, response) per tracking and map mode: ATE, the drift between start and
 #           end of the run (TUM monoVO alignment error with 3 s segments: the loop ends where it started), mapping ms,
 #           re-use counts, stored and culled keyframes, memory per marginalised keyframe
+#   localization  per shared sequence and tracking mode: a slam run saves its map (--save-map), then the same
+#           sequence is run in localisation-only mode in that map (--load-map --localization-only): frames located,
+#           ATE of both runs, their ratio, localisation ms per frame (median, p95), whether the map file is unchanged
+#           (saved again after the localisation run: the same bytes), map file size in KB per keyframe
 #   memory  test/hslam_soak in vo-reuse (4000 frames of the 640x480 loop, real-time mode, one run): resident
 #           memory growth per keyframe after the first 50 keyframes against the statistics' memory per marginalised
 #           keyframe (needs the test programs built: HSLAM_BUILD_TESTS)
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-map-bench), SEQUENCES, TRACKING
-# (default "hybrid direct"), MODES (default "vo-strict vo-reuse slam"), SECTIONS (default "real loop laps memory"),
+# (default "hybrid direct"), MODES (default "vo-strict vo-reuse slam"), SECTIONS (default "real loop laps
+# localization memory"),
 # LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000).
 set -uo pipefail # not -e: one failed run must not end the benchmark
 
@@ -40,7 +45,7 @@ data="${DATA:-$repo/../shared/data}"
 out="${OUT:-/tmp/hslam-map-bench}"
 sequences="${SEQUENCES:-7scenes_redkitchen_000-299 tsukuba_cg_000-149 kitti06_000-050}"
 tracking_modes="${TRACKING:-hybrid direct}"
-sections="${SECTIONS:-real loop laps memory}"
+sections="${SECTIONS:-real loop laps localization memory}"
 map_modes="${MODES:-vo-strict vo-reuse slam}"
 laps_list="${LAPS:-2 3}"
 lap_frames="${LAP_FRAMES:-300}"
@@ -166,6 +171,31 @@ if has_section laps; then
           "$(json "$prefix.json" marginalized_keyframes)" "$(json "$prefix.json" culled_keyframes)" \
           "$(awk -v m="$(json "$prefix.json" memory_mb_per_keyframe)" 'BEGIN { print m * 1024 }')"
       done
+    done
+  done
+  echo
+fi
+
+if has_section localization; then
+  echo "== localisation-only in a map saved by a slam run of the same sequence"
+  printf "%-28s %-7s %9s %9s %9s %6s %10s %8s %8s %9s %7s\n" sequence track located map_ate loc_ate ratio \
+    kf loc_ms loc_p95 unchanged kb_kf
+  for seq in $sequences; do
+    [[ -d "$data/$seq" ]] || { echo "$seq: not found under $data, skipped"; continue; }
+    for track in $tracking_modes; do
+      mapping="$out/$seq.$track.localization-map"
+      located="$out/$seq.$track.localization"
+      run "$mapping" "$seq" --tracking-mode "$track" --mode slam --save-map "$mapping.hmap" || continue
+      run "$located" "$seq" --load-map "$mapping.hmap" --localization-only --save-map "$located.hmap" || continue
+      unchanged=no
+      cmp -s "$mapping.hmap" "$located.hmap" && unchanged=yes
+      keyframes="$(json "$mapping.json" keyframes_held)"
+      printf "%-28s %-7s %9s %9.4f %9.4f %6.2f %10s %8.2f %8.2f %9s %7.1f\n" "$seq" "$track" "$(tracked "$located")" \
+        "$(ate "$mapping")" "$(ate "$located")" \
+        "$(awk -v a="$(ate "$located")" -v b="$(ate "$mapping")" 'BEGIN { print (b > 0 ? a / b : 0) }')" \
+        "$keyframes" "$(json "$located.json" tracking_ms_median)" "$(json "$located.json" tracking_ms_p95)" \
+        "$unchanged" \
+        "$(awk -v s="$(stat -c %s "$mapping.hmap")" -v k="$keyframes" 'BEGIN { print (k > 0 ? s / k / 1024 : 0) }')"
     done
   done
   echo
