@@ -53,7 +53,7 @@ if setarch "$(uname -m)" -R true 2>/dev/null; then
   no_aslr=(setarch "$(uname -m)" -R)
 fi
 targets=(test_window_threads test_worker_pool test_system_synthetic test_system_inputs test_system_tutorial
-  test_faults tutorial-hslam-dataset)
+  test_faults test_system_map_file tutorial-hslam-dataset)
 # Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping).
 threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals'
 echo "== ThreadSanitizer: building ${targets[*]} in $tsan${no_aslr[*]:+ (under ${no_aslr[*]})}"

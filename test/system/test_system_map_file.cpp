@@ -226,3 +226,38 @@ TEST_F(SystemMapFile, LocalizationOnlyTracksEveryFrameInTheLoadedMapWithoutChang
   const std::string after((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   EXPECT_TRUE(before == after) << "localisation-only changed the map";
 }
+
+TEST_F(SystemMapFile, RealTimeSaveThenLocalizationOnly)
+{
+  // The threaded path (ThreadSanitizer runs this test): saveMap while the mapping thread may still hold jobs, then
+  // localisation-only with the mapping thread idle beside it.
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  if (vpHSlamVocabulary::defaultPath().empty()) {
+    GTEST_SKIP() << "no vocabulary found (data/hslam-orb.hvoc or HSLAM_VOCABULARY): localisation-only needs one";
+  }
+  constexpr unsigned int kRealTimeFrames = kFrames;
+  vpHSlamSyntheticScene scene;
+  scene.configure(kWidth, kHeight, kRealTimeFrames, 30., 3);
+  vpHSlamParameters params = reuseParameters();
+  params.system.deterministic = false;
+  vpHSlam mapping(hslam_test::syntheticCamera(scene), params);
+  track(mapping, scene, kRealTimeFrames);
+  mapping.saveMap(path("realtime.hmap")); // waits for mapping first
+  std::cout << "real-time mapping run: " << mapping.getStatistics().trackedFrames << " frames tracked, "
+            << mapping.getStatistics().keyframes << " keyframes" << std::endl;
+  const hslam::MapSnapshot saved = hslam::loadMapFile(path("realtime.hmap"));
+  EXPECT_EQ(saved.keyframes.size(), mapping.getStatistics().keyframesHeld);
+
+  params.system.localizationOnly = true;
+  vpHSlam localization(hslam_test::syntheticCamera(scene), params);
+  localization.loadMap(path("realtime.hmap"));
+  track(localization, scene, kRealTimeFrames);
+  localization.synchronize();
+  const vpHSlam::Statistics s = localization.getStatistics();
+  std::cout << "real time: " << saved.keyframes.size() << " keyframes saved, " << s.trackedFrames << "/"
+            << kRealTimeFrames << " frames located" << std::endl;
+  EXPECT_EQ(s.trackedFrames, kRealTimeFrames);
+  EXPECT_EQ(s.keyframes, 0u);
+}
