@@ -115,7 +115,8 @@ if has_section loop; then
       --motion-blur --exposure-changes --vignette --response > "$out/synthetic-outward.log" 2>&1 &&
       touch "$seq/complete" || echo "outward loop: generation failed, see $out/synthetic-outward.log"
   fi
-  printf "%-7s %-9s %9s %10s %8s %12s %10s   %s\n" track map ate tracked map_ms loops/corr max_corr_ms runs
+  printf "%-7s %-9s %9s %10s %8s %12s %7s %7s %10s   %s\n" track map ate tracked map_ms loops/corr det_ms \
+    max_ver max_corr_ms runs
   for track in $tracking_modes; do
     for mode in $map_modes; do
       ates=()
@@ -132,15 +133,21 @@ if has_section loop; then
       [[ ${#prefixes[@]} -gt 0 ]] || continue
       maps=()
       tracks=()
+      detections=()
       worst=0
+      verification=0
       for p in "${prefixes[@]}"; do
         maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
         tracks+=("$(json "$p.json" tracked_frames)")
-        worst="$(awk -v a="$worst" -v b="$(json "$p.json" last_loop_correction_ms)" 'BEGIN { print (b > a ? b : a) }')"
+        detections+=("$(json "$p.json" loop_detection_ms_mean)")
+        worst="$(awk -v a="$worst" -v b="$(json "$p.json" loop_correction_ms_max)" 'BEGIN { print (b > a ? b : a) }')"
+        verification="$(awk -v a="$verification" -v b="$(json "$p.json" loop_verification_ms_max)" \
+          'BEGIN { print (b > a ? b : a) }')"
       done
-      printf "%-7s %-9s %9.4f %10s %8.2f %12s %10.1f   %s\n" "$track" "$mode" "$(median "${ates[@]}")" \
+      printf "%-7s %-9s %9.4f %10s %8.2f %12s %7.2f %7.1f %10.1f   %s\n" "$track" "$mode" "$(median "${ates[@]}")" \
         "$(median "${tracks[@]}")/801" "$(median "${maps[@]}")" \
-        "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" "$worst" "${ates[*]}"
+        "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" \
+        "$(median "${detections[@]}")" "$verification" "$worst" "${ates[*]}"
     done
   done
   echo
@@ -220,7 +227,8 @@ fi
 echo "(ATE and drift in ground-truth units: metres, Tsukuba centimetres; map_ms: mapping ms per keyframe; react/fused:"
 echo " global points re-activated / fused per keyframe; share: of the window's active points, from the global map;"
 echo " culled: share of the marginalised keyframes culled; kb_kf: memory per marginalised keyframe; loops/corr: loops"
-echo " detected / corrected summed over the runs; max_corr_ms: longest loop correction; files in $out)"
+echo " detected / corrected summed over the runs; det_ms: loop detection ms per keyframe (median of the runs);"
+echo " max_ver: longest Sim(3) verification of a candidate, ms; max_corr_ms: longest loop correction; files in $out)"
 if [[ $failures -gt 0 ]]; then
   echo "$failures run(s) failed"
   exit 1

@@ -33,6 +33,7 @@
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -145,7 +146,13 @@ public:
     int corrected = 0;             //!< loops whose pose-graph correction was applied
     int refusedImplausible = 0;    //!< verified loops refused for a rotation correction above the limit
     double lastCorrectionMs = 0.;  //!< wall time of the last correction (graph, optimisation, map update)
+    double correctionMsMax = 0.;   //!< longest correction
+    int detections = 0;            //!< keyframes checked for a loop (database queried)
+    double detectionMsTotal = 0.;  //!< their wall time: query, consistency, verification (correction excluded)
+    double verificationMsMax = 0.; //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
   };
+  //! True while a loop correction runs (read by the tracking thread: tracking must not wait for it).
+  bool correctingLoop() const { return m_correctingLoop.load(); }
   const LoopStatistics &loopStatistics() const { return m_loops; }
 
   // ---- map files (vpHSlam::saveMap / loadMap)
@@ -238,6 +245,7 @@ private:
     Sim3d SkeyframeCandidate; //!< measured by the Sim(3) verification
   };
   std::vector<LoopEdge> m_loopEdges; //!< every accepted loop, kept for the next corrections
+  std::atomic<bool> m_correctingLoop{false};
 };
 } // namespace hslam
 

@@ -52,6 +52,20 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
   if (!database.vectorOf(newest.id(), bow)) {
     return false;
   }
+  // Detection time: everything below but the correction (timed on its own).
+  const auto t0 = std::chrono::steady_clock::now();
+  double correctionMs = 0.;
+  struct DetectionTimer {
+    LoopStatistics &stats;
+    std::chrono::steady_clock::time_point start;
+    const double &excluded;
+    ~DetectionTimer()
+    {
+      ++stats.detections;
+      stats.detectionMsTotal +=
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() - excluded;
+    }
+  } timer{m_loops, t0, correctionMs};
   // Keyframes connected to the new one: the window and whatever is co-visible with it.
   std::set<int> connected;
   std::vector<int> neighbours;
@@ -100,8 +114,12 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     ++m_loops.candidatesVerified;
     int matches = 0;
     Sim3Estimate estimate;
+    const auto verificationStart = std::chrono::steady_clock::now();
     try {
       estimate = verifyLoop(newest, candidate, matches);
+      m_loops.verificationMsMax = std::max(
+          m_loops.verificationMsMax,
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - verificationStart).count());
     } catch (const vpHSlamException &e) { // a degenerate configuration: this candidate is not a loop
       VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << newest.id() << ": loop candidate " << candidate
                                                     << " could not be verified: " << e.getStringMessage());
@@ -139,6 +157,7 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     m.loopConsistency.clear();
     m_loopEdges.push_back({candidate, newest.id(), estimate.S21});
     bool corrected = false;
+    const auto correctionStart = std::chrono::steady_clock::now();
     try {
       corrected = correctLoop(newest, candidate);
     } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
@@ -146,6 +165,8 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
                                                     << " not corrected: " << e.getStringMessage());
     }
     m_loops.corrected += corrected ? 1 : 0;
+    correctionMs =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - correctionStart).count();
     VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop with keyframe " << candidate << " ("
                                                << estimate.inlierCount << " inliers, scale " << record.scale
                                                << ", translation correction " << record.translationDrift
@@ -233,6 +254,11 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
 bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
 {
   Impl &m = *m_impl;
+  struct Flag {
+    std::atomic<bool> &flag;
+    ~Flag() { flag = false; }
+  } correcting{m_correctingLoop};
+  m_correctingLoop = true;
   const auto t0 = std::chrono::steady_clock::now();
   PoseGraph graph;
   std::set<int> window;
@@ -352,6 +378,7 @@ bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
     }
   }
   m_loops.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  m_loops.correctionMsMax = std::max(m_loops.correctionMsMax, m_loops.lastCorrectionMs);
   VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop corrected, " << stored.size()
                                              << " stored keyframes moved (pose graph " << graph.vertexCount()
                                              << " vertices, " << graph.edgeCount() << " edges, " << summary.iterations

@@ -97,6 +97,13 @@ void RunStatistics::addHybridFrame(int matches, int inliers, double geometricWei
   m_geometricWeight.push_back(geometricWeight);
 }
 
+void RunStatistics::addTrackingMsDuringLoopCorrection(double ms)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  ++m_framesDuringLoopCorrection;
+  m_trackingMsMaxDuringLoopCorrection = std::max(m_trackingMsMaxDuringLoopCorrection, ms);
+}
+
 RunStatistics::Summary RunStatistics::summary() const
 {
   constexpr double kMedian = 0.5, kP95 = 0.95, kMax = 1.;
@@ -105,6 +112,8 @@ RunStatistics::Summary RunStatistics::summary() const
   s.trackingMsMedian = percentile(m_trackingMs, kMedian);
   s.trackingMsP95 = percentile(m_trackingMs, kP95);
   s.trackingMsMax = percentile(m_trackingMs, kMax);
+  s.framesDuringLoopCorrection = m_framesDuringLoopCorrection;
+  s.trackingMsMaxDuringLoopCorrection = m_trackingMsMaxDuringLoopCorrection;
   s.initializationMsMedian = percentile(m_initializationMs, kMedian);
   s.keyframeMsMedian = percentile(m_keyframeMs, kMedian);
   s.keyframeMsP95 = percentile(m_keyframeMs, kP95);
@@ -125,5 +134,7 @@ void RunStatistics::clear()
   m_orbMatches.clear();
   m_orbInliers.clear();
   m_geometricWeight.clear();
+  m_framesDuringLoopCorrection = 0;
+  m_trackingMsMaxDuringLoopCorrection = 0.;
 }
 } // namespace hslam

@@ -40,6 +40,8 @@ public:
   void addFrameMappingMs(double ms);
   //! Hybrid / indirect tracking of one frame: ORB matches, geometric inliers, K at the finest level.
   void addHybridFrame(int matches, int inliers, double geometricWeight);
+  //! Real-time mode: a frame whose tracking overlapped a loop correction in the mapping thread.
+  void addTrackingMsDuringLoopCorrection(double ms);
 
   struct Summary {
     double trackingMsMedian = 0., trackingMsP95 = 0., trackingMsMax = 0.;
@@ -47,6 +49,8 @@ public:
     double keyframeMsMedian = 0., keyframeMsP95 = 0.;
     double frameMappingMsMedian = 0.;
     double orbMatchesMedian = 0., orbInliersMedian = 0., geometricWeightMedian = 0.;
+    int framesDuringLoopCorrection = 0;            //!< frames whose tracking overlapped a loop correction
+    double trackingMsMaxDuringLoopCorrection = 0.; //!< the longest of them
   };
   Summary summary() const;
   void clear();
@@ -55,6 +59,8 @@ private:
   mutable std::mutex m_mutex;
   std::vector<double> m_trackingMs, m_initializationMs, m_keyframeMs, m_frameMappingMs;
   std::vector<double> m_orbMatches, m_orbInliers, m_geometricWeight;
+  int m_framesDuringLoopCorrection = 0;
+  double m_trackingMsMaxDuringLoopCorrection = 0.;
 };
 } // namespace hslam
 

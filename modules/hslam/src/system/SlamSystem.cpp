@@ -91,6 +91,7 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
   }
   const double t0 = nowMs();
   m_frameStartMs = t0;
+  const bool correctingLoopBefore = m_mapper->correctingLoop(); // an atomic: no lock, tracking never waits here
   const double c0 = threadCpuMs();
   FramePtr frame = m_preprocessor.process(I, timestamp, exposure, m_nextFrameId);
   const double c1 = threadCpuMs();
@@ -118,6 +119,9 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
     } else {
       m_cpuTrack += threadCpuMs() - c1;
     }
+  }
+  if (!m_params.system.deterministic && (correctingLoopBefore || m_mapper->correctingLoop())) {
+    m_runStats.addTrackingMsDuringLoopCorrection(nowMs() - t0); // real time: the frame overlapped a correction
   }
   if (state == vpHSlam::stateTracking) {
     ++m_trackedFrames;

@@ -227,6 +227,9 @@ private:
   int m_snapshotLoopCandidates = 0;             //!< loop candidates verified
   int m_snapshotLoopsCorrected = 0;             //!< loops corrected
   double m_snapshotLoopMs = 0.;                 //!< last correction, ms
+  double m_snapshotLoopCorrectionMaxMs = 0.;    //!< longest correction, ms
+  double m_snapshotLoopDetectionMeanMs = 0.;    //!< loop detection per keyframe checked, ms
+  double m_snapshotLoopVerificationMaxMs = 0.;  //!< longest candidate verification, ms
 };
 } // namespace hslam
 

@@ -184,7 +184,11 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotLoops = static_cast<int>(m_mapper->loopStatistics().loops.size());
   m_snapshotLoopCandidates = m_mapper->loopStatistics().candidatesVerified;
   m_snapshotLoopsCorrected = m_mapper->loopStatistics().corrected;
-  m_snapshotLoopMs = m_mapper->loopStatistics().lastCorrectionMs;
+  const LocalMapper::LoopStatistics &loops = m_mapper->loopStatistics();
+  m_snapshotLoopMs = loops.lastCorrectionMs;
+  m_snapshotLoopCorrectionMaxMs = loops.correctionMsMax;
+  m_snapshotLoopDetectionMeanMs = loops.detections > 0 ? loops.detectionMsTotal / loops.detections : 0.;
+  m_snapshotLoopVerificationMaxMs = loops.verificationMsMax;
 }
 
 void SlamSystem::synchronize()

@@ -113,6 +113,11 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.loopCandidatesVerified = static_cast<unsigned int>(m_snapshotLoopCandidates);
   s.loopsCorrected = static_cast<unsigned int>(m_snapshotLoopsCorrected);
   s.lastLoopCorrectionMs = m_snapshotLoopMs;
+  s.loopCorrectionMsMax = m_snapshotLoopCorrectionMaxMs;
+  s.loopDetectionMsMean = m_snapshotLoopDetectionMeanMs;
+  s.loopVerificationMsMax = m_snapshotLoopVerificationMaxMs;
+  s.framesDuringLoopCorrection = static_cast<unsigned int>(t.framesDuringLoopCorrection);
+  s.trackingMsMaxDuringLoopCorrection = t.trackingMsMaxDuringLoopCorrection;
   s.windowShareFromGlobal = r.windowActive > 0 ? static_cast<double>(r.windowFromGlobal) / r.windowActive : 0.;
   s.orbMatchesMedian = t.orbMatchesMedian;
   s.orbInliersMedian = t.orbInliersMedian;

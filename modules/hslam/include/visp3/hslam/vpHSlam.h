@@ -129,20 +129,25 @@ public:
     double orbMatchesMedian = 0.;           //!< hybrid/indirect tracking: ORB matches per tracked frame, median
     double orbInliersMedian = 0.;           //!< the same, geometric inliers of the pose-only step, median
     double geometricWeightMedian = 0.;      //!< K of eq. 4 at the finest level, median over hybrid-tracked frames
-    unsigned int relocalizationsAttempted = 0; //!< lost frames for which relocalisation was tried
-    unsigned int relocalizationsSucceeded = 0; //!< relocalisations after which tracking resumed in the same map
-    double descriptorKbPerKeyframe = 0.;       //!< memory the descriptors add to a keyframe (points + BoW), KB
-    double marginalizedMemoryMb = 0.;          //!< held for keyframes that left the window (global map, index), MB
-    unsigned int marginalizedKeyframes = 0;    //!< keyframes kept in the global map (vo-reuse, slam)
-    unsigned int culledKeyframes = 0;          //!< of which culled: pose node only, out of co-visibility and database
-    unsigned int globalPoints = 0;             //!< points stored in the global map
-    double reactivatedPointsPerKeyframe = 0.;  //!< global points re-activated by early adoption, per keyframe
-    double fusedPointsPerKeyframe = 0.;        //!< global points absorbed by late fusion, per keyframe
-    double windowShareFromGlobal = 0.;         //!< share of the window's active points that came from the global map
-    unsigned int loopCandidatesVerified = 0;   //!< slam mode: consistent loop candidates given to the Sim(3) check
-    unsigned int loopsDetected = 0;            //!< slam mode: loops accepted by the Sim(3) check
-    unsigned int loopsCorrected = 0;           //!< slam mode: loops whose pose-graph correction was applied
-    double lastLoopCorrectionMs = 0.;          //!< slam mode: wall time of the last correction, milliseconds
+    unsigned int relocalizationsAttempted = 0;   //!< lost frames for which relocalisation was tried
+    unsigned int relocalizationsSucceeded = 0;   //!< relocalisations after which tracking resumed in the same map
+    double descriptorKbPerKeyframe = 0.;         //!< memory the descriptors add to a keyframe (points + BoW), KB
+    double marginalizedMemoryMb = 0.;            //!< held for keyframes that left the window (global map, index), MB
+    unsigned int marginalizedKeyframes = 0;      //!< keyframes kept in the global map (vo-reuse, slam)
+    unsigned int culledKeyframes = 0;            //!< of which culled: pose node only, out of co-visibility and database
+    unsigned int globalPoints = 0;               //!< points stored in the global map
+    double reactivatedPointsPerKeyframe = 0.;    //!< global points re-activated by early adoption, per keyframe
+    double fusedPointsPerKeyframe = 0.;          //!< global points absorbed by late fusion, per keyframe
+    double windowShareFromGlobal = 0.;           //!< share of the window's active points that came from the global map
+    unsigned int loopCandidatesVerified = 0;     //!< slam mode: consistent loop candidates given to the Sim(3) check
+    unsigned int loopsDetected = 0;              //!< slam mode: loops accepted by the Sim(3) check
+    unsigned int loopsCorrected = 0;             //!< slam mode: loops whose pose-graph correction was applied
+    double lastLoopCorrectionMs = 0.;            //!< slam mode: wall time of the last correction, milliseconds
+    double loopCorrectionMsMax = 0.;             //!< slam mode: longest correction (pose graph, map update), ms
+    double loopDetectionMsMean = 0.;             //!< slam mode: loop detection per keyframe (query, verification), ms
+    double loopVerificationMsMax = 0.;           //!< slam mode: longest verification of a candidate (Sim(3)), ms
+    unsigned int framesDuringLoopCorrection = 0; //!< real time: frames tracked while a correction ran
+    double trackingMsMaxDuringLoopCorrection = 0.; //!< real time: the longest of their tracking times, ms
   };
 
   /*!
