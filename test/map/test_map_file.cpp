@@ -295,6 +295,14 @@ TEST_F(MapFileTest, BadFilesGiveClearErrors)
   repeated.keyframes[1].id = 0;
   hslam::saveMapFile(bad, repeated);
   expectHSlamError(load, vpHSlamException::parseError, {"repeated"});
+  MapSnapshot huge = sampleMap(4, 10, 3);
+  huge.keyframes[3].id = 2147483647; // the next id would overflow
+  hslam::saveMapFile(bad, huge);
+  expectHSlamError(load, vpHSlamException::parseError, {"out of range"});
+  MapSnapshot segment = sampleMap(4, 10, 3);
+  segment.keyframes[0].segment = -2;
+  hslam::saveMapFile(bad, segment);
+  expectHSlamError(load, vpHSlamException::parseError, {"segment"});
 }
 
 TEST(MapFileGraph, RestoreGivesTheSameGraphAsTheSavedMap)

@@ -207,6 +207,7 @@ TEST_F(SystemMapFile, LocalizationOnlyTracksEveryFrameInTheLoadedMapWithoutChang
   hslam_test::expectHSlamError([&]() { localization.track(I, scene.getTimestamp(0)); },
                                vpHSlamException::invalidArgument, {"loadMap"});
   localization.loadMap(path("map.hmap"));
+  localization.loadMap(path("map.hmap")); // a second load replaces the first (nothing indexed twice)
   track(localization, scene, kFrames);
   const vpHSlam::Statistics s = localization.getStatistics();
   const double localizationAte = hslam_test::simAte(gt, localization.getTrajectory());

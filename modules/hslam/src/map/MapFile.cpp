@@ -27,6 +27,8 @@ constexpr std::uint8_t kFlagCorner = 1;
 constexpr std::uint8_t kFlagHasOrb = 2;
 //! A stored quaternion must be unit to this tolerance on its squared norm (it was written normalised).
 constexpr double kUnitQuaternionTolerance = 1e-6;
+//! Keyframe ids and segments above this are refused: the system numbers its next ones after them.
+constexpr int kMaxId = 1 << 30;
 //! Within this, the stored quaternion is the unit one that was written (a few ulps of the squared norm).
 constexpr double kExactUnitTolerance = 1e-14;
 
@@ -230,8 +232,11 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
     kf.id = r.i32("a keyframe");
     kf.frameId = r.i32("a keyframe");
     kf.segment = r.i32("a keyframe");
-    if (kf.id < 0 || !ids.insert(kf.id).second) {
-      corrupt(path, "keyframe id " + std::to_string(kf.id) + " negative or repeated");
+    if (kf.id < 0 || kf.id > kMaxId || !ids.insert(kf.id).second) {
+      corrupt(path, "keyframe id " + std::to_string(kf.id) + " out of range or repeated");
+    }
+    if (kf.segment < 0 || kf.segment > kMaxId) {
+      corrupt(path, "keyframe segment " + std::to_string(kf.segment) + " out of range");
     }
     kf.timestamp = finite(r.f64("a keyframe"), path, "keyframe timestamp");
     kf.exposure = finite(r.f64("a keyframe"), path, "keyframe exposure");

@@ -27,8 +27,9 @@
   \endverbatim
   Reading checks everything before anything is used: magic, version, descriptor size, checksum, counts against the
   bytes left, finite values in range (unit quaternions, positive inverse depths, pixels inside the image), unique
-  keyframe ids, edges and observers naming keyframes of the file. Any failure is a vpHSlamException naming the file
-  and the reason (parseError: corrupt, truncated; unsupported: another version or descriptor size).
+  keyframe ids (and ids and segments below 2^30), edges and observers naming keyframes of the file. Any failure is a
+  vpHSlamException naming the file and the reason (parseError: corrupt, truncated; unsupported: another version or
+  descriptor size).
 */
 #ifndef HSLAM_MAP_MAP_FILE_H
 #define HSLAM_MAP_MAP_FILE_H

@@ -60,6 +60,9 @@ void LocalMapper::restoreMap(std::vector<GlobalKeyframe> keyframes, std::vector<
     lastSegment = std::max(lastSegment, kf.segment);
   }
   m_globalMap.restore(std::move(keyframes), std::move(edges));
+  if (m_impl->relocalization) {
+    m_impl->relocalization->clear(); // a second load replaces the first: nothing of it stays searchable
+  }
   m_segment = std::max(m_segment, lastSegment + 1);
 }
 
