@@ -226,6 +226,29 @@ TEST_F(SystemMapFile, LocalizationOnlyTracksEveryFrameInTheLoadedMapWithoutChang
   const std::string before((std::istreambuf_iterator<char>(a)), std::istreambuf_iterator<char>());
   const std::string after((std::istreambuf_iterator<char>(b)), std::istreambuf_iterator<char>());
   EXPECT_TRUE(before == after) << "localisation-only changed the map";
+
+  // A covered lens (frames 80-99 black): lost while covered, located again in the same map right after.
+  vpHSlam covered(hslam_test::syntheticCamera(scene), params);
+  covered.loadMap(path("map.hmap"));
+  constexpr unsigned int kCoverFirst = 80, kCoverLast = 99, kBackWithin = 5;
+  int backAt = -1;
+  for (unsigned int i = 0; i < kFrames; ++i) {
+    scene.render(i, I);
+    if (i >= kCoverFirst && i <= kCoverLast) {
+      I = 0;
+    }
+    const vpHSlam::State state = covered.track(I, scene.getTimestamp(i));
+    if (i >= kCoverFirst && i <= kCoverLast) {
+      EXPECT_EQ(state, vpHSlam::stateLost) << "frame " << i << " is black";
+    } else if (i > kCoverLast && backAt < 0 && state == vpHSlam::stateTracking) {
+      backAt = static_cast<int>(i);
+    }
+  }
+  std::cout << "covered lens " << kCoverFirst << "-" << kCoverLast << ": located again at frame " << backAt << ", "
+            << covered.getStatistics().trackedFrames << "/" << kFrames << " located" << std::endl;
+  ASSERT_GE(backAt, 0);
+  EXPECT_LE(backAt, static_cast<int>(kCoverLast + kBackWithin));
+  EXPECT_LT(hslam_test::simAte(gt, covered.getTrajectory()), 0.01);
 }
 
 TEST_F(SystemMapFile, RealTimeSaveThenLocalizationOnly)
