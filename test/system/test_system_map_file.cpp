@@ -217,8 +217,8 @@ TEST_F(SystemMapFile, LocalizationOnlyTracksEveryFrameInTheLoadedMapWithoutChang
   EXPECT_EQ(s.trackedFrames, kFrames);
   EXPECT_EQ(s.segments, 0u); // nothing initialised
   // Poses from ORB matches and PnP (pixel-level keypoints) against a map whose own frames were aligned
-  // photometrically: measured 5.1 mm against 1.0 mm for the mapping run here, within 10 % on the real sequences
-  // (README). Bound: the one the global map test sets for vo-reuse itself on this scene.
+  // photometrically: measured 4.5 mm against 1.0 mm for the mapping run here; 1-10 % worse on 7-Scenes and Tsukuba,
+  // 29-44 % on KITTI (README). Bound: the one the global map test sets for vo-reuse itself on this scene.
   EXPECT_LT(localizationAte, 0.01);
   // The map is not changed: saved again, it is the same file byte for byte.
   localization.saveMap(path("after.hmap"));

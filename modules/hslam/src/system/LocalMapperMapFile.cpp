@@ -8,10 +8,17 @@
 #include "system/LocalMapperImpl.h"
 
 #include <algorithm>
+#include <cmath>
 #include <set>
 
 namespace hslam
 {
+namespace
+{
+//! An immature point goes into a saved map when its inverse-depth interval is below this share of its sum (+-10 %).
+constexpr float kMaxImmatureRelativeInterval = 0.1f;
+} // namespace
+
 void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges)
 {
   Impl &m = *m_impl;
@@ -20,8 +27,28 @@ void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vecto
   for (const auto &entry : m_globalMap.keyframes()) {
     keyframes.push_back(entry.second);
   }
+  const float minQuality = static_cast<float>(m.params.mapper.minTraceQuality);
   for (const KeyframePtr &kf : m_window) {
     keyframes.push_back(leanKeyframe(*kf, true));
+    // The newest keyframes' points are mostly still immature: those whose depth interval has converged are kept too
+    // (variance: the half interval squared), or the end of the run has no map to locate a camera in.
+    for (const ImmaturePoint &pt : kf->immature) {
+      if (!pt.hasOrb || pt.lastStatus != TraceStatus::good || !(pt.quality > minQuality) || !(pt.idepthMin > 0.f) ||
+          !std::isfinite(pt.idepthMax) ||
+          pt.idepthMax - pt.idepthMin > kMaxImmatureRelativeInterval * (pt.idepthMax + pt.idepthMin)) {
+        continue;
+      }
+      GlobalPoint q;
+      q.u = pt.u;
+      q.v = pt.v;
+      q.idepth = 0.5f * (pt.idepthMin + pt.idepthMax);
+      q.idepthVar = 0.25f * (pt.idepthMax - pt.idepthMin) * (pt.idepthMax - pt.idepthMin);
+      q.orb = pt.orb;
+      q.orbAngleDeg = pt.orbAngleDeg;
+      q.isCorner = pt.isCorner;
+      q.hasOrb = true;
+      keyframes.back().points.push_back(std::move(q));
+    }
     // Each window pair once: from the older keyframe to the newer one.
     std::vector<PairInformation> pairs = m.optimizer.pairInformation(kf->id());
     pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
