@@ -35,6 +35,11 @@ struct PinholeIntrinsics {
   double fx = 1., fy = 1., cx = 0., cy = 0.;
   //! Intrinsics of the level below (half resolution), following the pixel-centre convention above.
   PinholeIntrinsics halved() const { return {fx * 0.5, fy * 0.5, (cx + 0.5) * 0.5 - 0.5, (cy + 0.5) * 0.5 - 0.5}; }
+  //! The point at pixel (u, v) with inverse depth \e idepth, in this camera's frame.
+  Eigen::Vector3d unproject(double u, double v, double idepth) const
+  {
+    return Eigen::Vector3d((u - cx) / fx, (v - cy) / fy, 1.) / idepth;
+  }
 };
 
 //! One level: (I, dI/du, dI/dv) per pixel, row-major, plus squared gradient norm.

@@ -31,8 +31,7 @@ void LocalMapper::keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe
     if (p.status == PointStatus::outlier || !p.hasOrb || !(p.idepth > 0.) || !p.isCorner) {
       continue;
     }
-    const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
-    out.wX.push_back(wMc * (ray / p.idepth));
+    out.wX.push_back(wMc * m.K0.unproject(p.u, p.v, p.idepth));
     out.descriptors.push_back(p.orb);
   }
 }
@@ -78,8 +77,7 @@ bool LocalMapper::indexGlobalMap()
       }
       described.push_back(p.orb);
       if (p.state == GlobalPointState::stored && p.idepth > 0.f) {
-        const Eigen::Vector3d ray((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.);
-        wX.push_back(wMc * (ray / static_cast<double>(p.idepth)));
+        wX.push_back(wMc * m.K0.unproject(p.u, p.v, p.idepth));
         corners.push_back(p.orb);
       }
     }
@@ -112,8 +110,7 @@ void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &featur
         continue;
       }
       ReferenceFeature f;
-      f.Xref = wMc * (Eigen::Vector3d((p.u - m.K0.cx) / m.K0.fx, (p.v - m.K0.cy) / m.K0.fy, 1.) /
-                      static_cast<double>(p.idepth));
+      f.Xref = wMc * m.K0.unproject(p.u, p.v, p.idepth);
       f.orb = p.orb;
       f.angleDeg = p.orbAngleDeg;
       features.push_back(f);

@@ -572,6 +572,7 @@ void SlamSystem::reset()
   m_relocSuccesses = 0;
   m_localizationReady = false; // the loaded map went with the rest
   m_localizedKeyframe = -1;
+  m_localMapKeyframe = -1;
   std::lock_guard<std::mutex> lock(m_imageMutex);
   m_lastImage.resize(0, 0);
 }

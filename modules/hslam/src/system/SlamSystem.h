@@ -169,8 +169,11 @@ private:
   int m_consecutiveFailures = 0;
   bool m_localizationReady = false; //!< localisation-only: a map is loaded and indexed
   int m_localizedKeyframe = -1;     //!< localisation-only: keyframe that placed the last located frame
-  bool m_relocalizing = false;      //!< tracking failed: lost frames try relocalisation until it works or times out
-  double m_lostSince = 0.;          //!< timestamp of the first frame of the current relocalisation attempt, seconds
+  int m_localMapKeyframe = -1;      //!< localisation-only: keyframe m_localMapFeatures were gathered around
+  std::vector<ReferenceFeature> m_localMapFeatures; //!< its stored points and its neighbours', world coordinates
+  std::vector<int> m_localMapKeyframes;             //!< the keyframes they come from
+  bool m_relocalizing = false; //!< tracking failed: lost frames try relocalisation until it works or times out
+  double m_lostSince = 0.;     //!< timestamp of the first frame of the current relocalisation attempt, seconds
   bool m_initialized = false;
   unsigned int m_segment = 0;
   SE3d m_segmentOrigin;                          //!< wMc given to the first keyframe of the current segment

@@ -34,21 +34,20 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
     history.prelastMref = m_prelastFrameId >= 0 && m_recorder.framePose(m_prelastFrameId, wMprelast)
                               ? wMprelast.inverse()
                               : history.lastMref;
-    std::vector<ReferenceFeature> features;
-    std::vector<int> keyframeIds;
-    {
+    if (m_localMapKeyframe != m_localizedKeyframe) { // the map never changes: rebuilt only for another keyframe
       std::lock_guard<std::mutex> lock(m_mapperMutex);
-      m_mapper->localMapFeatures(m_localizedKeyframe, features, keyframeIds);
+      m_mapper->localMapFeatures(m_localizedKeyframe, m_localMapFeatures, m_localMapKeyframes);
+      m_localMapKeyframe = m_localizedKeyframe;
     }
     IndirectStepResult step;
-    if (m_hybrid->indirectStep(features, CoarseTracker::predictConstantVelocity(history), step) &&
+    if (m_hybrid->indirectStep(m_localMapFeatures, CoarseTracker::predictConstantVelocity(history), step) &&
         step.inliers >= m_params.tracking.relocalizationMinInliers) {
       located = true;
       cMw = step.newMref;
       inliers = step.inliers;
       how = "tracked in the map";
       std::lock_guard<std::mutex> lock(m_mapperMutex);
-      const int closest = m_mapper->closestKeyframe(cMw, keyframeIds);
+      const int closest = m_mapper->closestKeyframe(cMw, m_localMapKeyframes);
       m_localizedKeyframe = closest >= 0 ? closest : m_localizedKeyframe;
     }
   }

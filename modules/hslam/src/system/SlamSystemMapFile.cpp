@@ -124,6 +124,7 @@ void SlamSystem::loadMap(const std::string &path)
   }
   m_localizationReady = m_params.system.localizationOnly;
   m_localizedKeyframe = -1;
+  m_localMapKeyframe = -1; // gathered from the previous map
   // New keyframes are numbered after the loaded ones: ids stay unique in the global map and in a saved map.
   m_keyframeCount = std::max(m_keyframeCount.load(), lastId + 1);
   m_recorder.setFirstKeyframeId(m_keyframeCount.load());
