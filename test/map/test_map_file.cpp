@@ -95,6 +95,10 @@ MapSnapshot sampleMap(int keyframes, int pointsPerKeyframe, unsigned seed)
       for (int o : ids) {
         if (o != kf.id && bits(rng) % 2 == 0) {
           p.observers.push_back(o);
+          // A pixel for each observer; some unknown (NaN), as a point projected behind an observer leaves.
+          const float nan = std::numeric_limits<float>::quiet_NaN();
+          p.observedAt.push_back(bits(rng) % 7 == 0 ? std::array<float, 2>{nan, nan}
+                                                     : std::array<float, 2>{uu(rng), uv(rng)});
         }
       }
       kf.points.push_back(p);
@@ -154,6 +158,13 @@ void expectSameMap(const MapSnapshot &a, const MapSnapshot &b)
       EXPECT_EQ(p.hasOrb, q.hasOrb);
       EXPECT_EQ(p.state, q.state);
       EXPECT_EQ(p.observers, q.observers);
+      ASSERT_EQ(p.observedAt.size(), q.observedAt.size());
+      for (size_t o = 0; o < p.observedAt.size(); ++o) {
+        for (int c = 0; c < 2; ++c) { // bit for bit (NaN included)
+          EXPECT_EQ(0, std::memcmp(&p.observedAt[o][static_cast<size_t>(c)], &q.observedAt[o][static_cast<size_t>(c)],
+                                   sizeof(float)));
+        }
+      }
     }
   }
   ASSERT_EQ(a.edges.size(), b.edges.size());
@@ -220,6 +231,32 @@ TEST_F(MapFileTest, RoundTripIsExact)
   }
 }
 
+TEST_F(MapFileTest, VersionOneFilesAreStillRead)
+{
+  // Version 1 had observer ids without pixels: without observers, a version-2 file is a version-1 file but for its
+  // version field, and reads back the same.
+  MapSnapshot map = sampleMap(3, 5, 2);
+  for (GlobalKeyframe &kf : map.keyframes) {
+    for (GlobalPoint &p : kf.points) {
+      p.observers.clear();
+      p.observedAt.clear();
+    }
+  }
+  hslam::saveMapFile(path("v2.hmap"), map);
+  std::string bytes = readAll(path("v2.hmap"));
+  putU32(bytes, 8, 1);
+  writeAll(path("v1.hmap"), withChecksum(bytes));
+  expectSameMap(map, hslam::loadMapFile(path("v1.hmap")));
+
+  // With observers the layouts differ: version-2 records read as version-1 ones are refused, not misread.
+  MapSnapshot withObservers = sampleMap(3, 1, 2);
+  hslam::saveMapFile(path("v2o.hmap"), withObservers);
+  std::string v2 = readAll(path("v2o.hmap"));
+  putU32(v2, 8, 1);
+  writeAll(path("v1o.hmap"), withChecksum(v2));
+  EXPECT_THROW(hslam::loadMapFile(path("v1o.hmap")), vpHSlamException); // 12-byte observers read as 4-byte ones
+}
+
 TEST_F(MapFileTest, EmptyMapRoundTrips)
 {
   MapSnapshot map = sampleMap(0, 0, 1);
@@ -252,9 +289,9 @@ TEST_F(MapFileTest, BadFilesGiveClearErrors)
   expectHSlamError(load, vpHSlamException::parseError, {"corrupt", "checksum"});
 
   std::string version = bytes;
-  putU32(version, 8, 2);
+  putU32(version, 8, 3);
   writeAll(bad, version);
-  expectHSlamError(load, vpHSlamException::unsupported, {"version 2", "version 1"});
+  expectHSlamError(load, vpHSlamException::unsupported, {"version 3", "versions 1 to 2"});
   std::string descriptor = bytes;
   putU32(descriptor, 12, 64);
   writeAll(bad, descriptor);

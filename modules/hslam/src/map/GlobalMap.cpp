@@ -77,6 +77,7 @@ void GlobalMap::absorb(int keyframeId, size_t pointIndex, GlobalPointState state
   p.state = state;
   // The active point carries the observers on; this copy keeps only what history needs.
   std::vector<int>().swap(p.observers);
+  std::vector<std::array<float, 2>>().swap(p.observedAt);
 }
 
 GlobalKeyframe *GlobalMap::find(int id)
@@ -181,6 +182,7 @@ double GlobalMap::memoryBytes() const
     bytes += static_cast<double>(k.second.points.capacity() * sizeof(GlobalPoint));
     for (const GlobalPoint &p : k.second.points) {
       bytes += static_cast<double>(p.observers.capacity() * sizeof(int));
+      bytes += static_cast<double>(p.observedAt.capacity() * sizeof(std::array<float, 2>));
     }
   }
   for (const auto &row : m_shared) {

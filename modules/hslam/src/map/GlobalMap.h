@@ -38,6 +38,8 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <utility>
@@ -63,7 +65,29 @@ struct GlobalPoint {
   bool hasOrb = false;
   GlobalPointState state = GlobalPointState::stored;
   std::vector<int> observers; //!< other keyframes with an inlier residual (sorted ids)
+  //! Where the point was seen in each observer (same order as observers; NaN: not known, e.g. a version-1 map
+  //! file). Measured when the host left the window: the projection through the window's optimised poses and
+  //! inverse depth, i.e. where the photometric residuals put it; re-used points keep their older measurements.
+  //! The global bundle adjustment's observations.
+  std::vector<std::array<float, 2>> observedAt;
 };
+
+//! Drops the observers (and their pixels) of \e p for which \e drop(id) is true.
+template <typename Drop> void dropObservers(GlobalPoint &p, Drop drop)
+{
+  size_t out = 0;
+  for (size_t i = 0; i < p.observers.size(); ++i) {
+    if (!drop(p.observers[i])) {
+      p.observers[out] = p.observers[i];
+      if (i < p.observedAt.size()) {
+        p.observedAt[out] = p.observedAt[i];
+      }
+      ++out;
+    }
+  }
+  p.observers.resize(out);
+  p.observedAt.resize(std::min(out, p.observedAt.size()));
+}
 
 //! A marginalised keyframe.
 struct GlobalKeyframe {

@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <set>
 
 namespace hslam
@@ -75,7 +76,8 @@ double finite(double x, const std::string &path, const char *what)
   return x;
 }
 
-void readPoint(ByteReader &r, const MapCamera &camera, const std::string &path, GlobalPoint &p)
+void readPoint(ByteReader &r, const MapCamera &camera, std::uint32_t version, const std::string &path,
+               GlobalPoint &p)
 {
   p.u = static_cast<float>(finite(r.f32("a point's pixel"), path, "point pixel"));
   p.v = static_cast<float>(finite(r.f32("a point's pixel"), path, "point pixel"));
@@ -104,10 +106,22 @@ void readPoint(ByteReader &r, const MapCamera &camera, const std::string &path, 
   }
   p.state = static_cast<GlobalPointState>(state);
   const std::uint32_t observers = r.u32("a point's observer count");
-  r.requireRecords(observers, 4, "observers");
+  // Version 1 stored observer ids only; version 2 adds the pixel each observer saw the point at (NaN: unknown).
+  r.requireRecords(observers, version == 1 ? 4 : 12, "observers");
   p.observers.resize(observers);
-  for (int &o : p.observers) {
-    o = r.i32("an observer id");
+  const float unknown = std::numeric_limits<float>::quiet_NaN();
+  p.observedAt.assign(observers, {unknown, unknown});
+  for (size_t i = 0; i < observers; ++i) {
+    p.observers[i] = r.i32("an observer id");
+    if (version == 1) {
+      continue;
+    }
+    for (float &x : p.observedAt[i]) {
+      x = r.f32("an observer's pixel");
+      if (std::isinf(x)) {
+        corrupt(path, "infinite observer pixel");
+      }
+    }
   }
 }
 } // namespace
@@ -149,8 +163,11 @@ void saveMapFile(const std::string &path, const MapSnapshot &map)
       w.u8(static_cast<std::uint8_t>((p.isCorner ? kFlagCorner : 0) | (p.hasOrb ? kFlagHasOrb : 0)));
       w.u8(static_cast<std::uint8_t>(p.state));
       w.u32(static_cast<std::uint32_t>(p.observers.size()));
-      for (int o : p.observers) {
-        w.i32(o);
+      for (size_t i = 0; i < p.observers.size(); ++i) {
+        w.i32(p.observers[i]);
+        const float unknown = std::numeric_limits<float>::quiet_NaN();
+        w.f32(i < p.observedAt.size() ? p.observedAt[i][0] : unknown);
+        w.f32(i < p.observedAt.size() ? p.observedAt[i][1] : unknown);
       }
     }
   }
@@ -184,10 +201,10 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
   char magic[sizeof(kMagic)];
   header.raw(magic, sizeof(magic), "the header");
   const std::uint32_t version = header.u32("the header");
-  if (version != kMapFileVersion) {
+  if (version < kOldestMapFileVersion || version > kMapFileVersion) {
     throwAt(vpHSlamException::unsupported, path, 0,
-            "map file format version " + std::to_string(version) + ", this build reads version " +
-                std::to_string(kMapFileVersion));
+            "map file format version " + std::to_string(version) + ", this build reads versions " +
+                std::to_string(kOldestMapFileVersion) + " to " + std::to_string(kMapFileVersion));
   }
   const std::uint32_t descriptorBytes = header.u32("the header");
   if (descriptorBytes != static_cast<std::uint32_t>(kOrbDescriptorBytes)) {
@@ -255,7 +272,7 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
     r.requireRecords(points, kPointRecordBytes, "points");
     kf.points.resize(points);
     for (GlobalPoint &p : kf.points) {
-      readPoint(r, map.camera, path, p);
+      readPoint(r, map.camera, version, path, p);
     }
   }
   for (const GlobalKeyframe &kf : map.keyframes) {

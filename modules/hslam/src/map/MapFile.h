@@ -6,11 +6,11 @@
   \brief H-SLAM's map file: the global map (keyframes kept lean, their points in inverse-depth form, the pose-pose
   edges) with the camera it was built with and the vocabulary it was indexed with. vpHSlam::saveMap / loadMap.
 
-  Layout (little-endian, common/BinaryIo.h), version 1:
+  Layout (little-endian, common/BinaryIo.h), version 2 (version 1 is still read: observer ids without pixels):
   \verbatim
   offset  bytes  field
   0       8      magic "HSLAMMAP"
-  8       4      format version (1)
+  8       4      format version (2)
   12      4      descriptor bytes (32: 256-bit ORB)
   16      4+4    image width, height (rectified, pixels)
   24      4x8    fx, fy, cx, cy of the rectified pinhole camera the pixels and inverse depths refer to
@@ -20,7 +20,7 @@
                    affine a, b (2 x f64), culled (u8), point count (u32), then per point:
                      u, v, idepth, idepth variance (4 x f32), ORB (32 bytes), ORB angle (f32),
                      flags (u8: 1 corner, 2 has ORB), state (u8: GlobalPointState), observer count (u32),
-                     observer ids (i32 each)
+                     per observer: id (i32), the pixel it saw the point at (u, v: 2 x f32, NaN if unknown)
   ...     4      pose-pose edge count, then per edge:
                    from, to (2 x i32), toMfrom (7 x f64), information (36 x f64, row-major), consecutive (u8)
   end-8   8      checksum: hashBytes() of every byte before it
@@ -59,7 +59,9 @@ struct MapSnapshot {
 };
 
 //! Current format version written by saveMapFile().
-constexpr std::uint32_t kMapFileVersion = 1;
+constexpr std::uint32_t kMapFileVersion = 2;
+//! Oldest version loadMapFile() still reads.
+constexpr std::uint32_t kOldestMapFileVersion = 1;
 
 //! Write \e map to \e path atomically (a temporary file renamed over it). Throws vpHSlamException on I/O errors.
 VISP_EXPORT void saveMapFile(const std::string &path, const MapSnapshot &map);

@@ -25,6 +25,12 @@
 
 namespace hslam
 {
+//! Where a point was seen in a keyframe other than its host (a measurement for the global bundle adjustment).
+struct PixelObservation {
+  int keyframeId = -1;
+  float u = 0.f, v = 0.f; //!< level-0 pixel
+};
+
 //! Life cycle of a point.
 enum class PointStatus : uint8_t {
   active,       //!< in the window, optimised by the photometric BA
@@ -51,6 +57,9 @@ struct MapPoint {
   double idepthPrior = 0.;
   double idepthPriorWeight = 0.;
   bool fromGlobalMap = false; //!< re-activated or fused from a global point (vo-reuse)
+  //! Measurements a re-used point brings from the global map (its old host pixel and old observers' pixels): the
+  //! window only measures it in its own keyframes; the others are kept as they were measured.
+  std::vector<PixelObservation> carried;
 };
 
 //! Adds \e keyframeId to a sorted list of observer ids (no duplicate).

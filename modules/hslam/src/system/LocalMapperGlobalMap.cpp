@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
+#include <map>
 
 namespace hslam
 {
@@ -67,6 +69,34 @@ ReuseTarget makeReuseTarget(const SE3d &cMw, const PinholeIntrinsics &K, int wid
   }
   return target;
 }
+
+/*!
+  A global point enters the window (re-activated or fused into \e mp): its observers become the active point's, and
+  its measurements (old host pixel, observers' pixels) are carried, so that the global bundle adjustment still has
+  them when the point leaves the window again.
+*/
+void carryObservations(MapPoint &mp, const GlobalPoint &old, int oldHostId)
+{
+  auto carry = [&mp](int id, float u, float v) {
+    if (!std::isfinite(u) || !std::isfinite(v)) {
+      return;
+    }
+    for (const PixelObservation &o : mp.carried) {
+      if (o.keyframeId == id) {
+        return;
+      }
+    }
+    mp.carried.push_back({id, u, v});
+  };
+  carry(oldHostId, old.u, old.v);
+  for (size_t i = 0; i < old.observers.size(); ++i) {
+    addObserver(mp.observers, old.observers[i]);
+    if (i < old.observedAt.size()) {
+      carry(old.observers[i], old.observedAt[i][0], old.observedAt[i][1]);
+    }
+  }
+  addObserver(mp.observers, oldHostId);
+}
 } // namespace
 
 bool LocalMapper::keepsGlobalMap() const
@@ -85,6 +115,14 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
   g.cMw = kf.frame->cMw;
   g.affine = kf.frame->affine;
   g.points.reserve(kf.points.size());
+  // Observers' poses, for the pixels where they saw each point (window keyframes, else stored ones).
+  std::map<int, SE3d> observerPoses;
+  for (const KeyframePtr &w : m_window) {
+    observerPoses[w->id()] = w->frame->cMw;
+  }
+  const PinholeIntrinsics &K = m_impl->K0;
+  const SE3d wMh = kf.frame->cMw.inverse();
+  constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
   for (const MapPoint &p : kf.points) {
     const bool kept = p.status == PointStatus::marginalized || (withActivePoints && p.status == PointStatus::active);
     if (!kept || !(p.idepth > 0.) || !std::isfinite(p.idepthVar)) {
@@ -101,6 +139,30 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
     q.hasOrb = p.hasOrb;
     q.observers = p.observers;
     q.observers.shrink_to_fit();
+    q.observedAt.assign(q.observers.size(), {kUnknown, kUnknown});
+    const Eigen::Vector3d wX = wMh * K.unproject(p.u, p.v, p.idepth);
+    for (size_t i = 0; i < q.observers.size(); ++i) {
+      const int o = q.observers[i];
+      auto carried = std::find_if(p.carried.begin(), p.carried.end(),
+                                  [o](const PixelObservation &c) { return c.keyframeId == o; });
+      if (carried != p.carried.end()) {
+        q.observedAt[i] = {carried->u, carried->v};
+        continue;
+      }
+      auto pose = observerPoses.find(o);
+      if (pose == observerPoses.end()) {
+        const GlobalKeyframe *stored = m_globalMap.find(o);
+        if (!stored) {
+          continue;
+        }
+        pose = observerPoses.emplace(o, stored->cMw).first;
+      }
+      const Eigen::Vector3d cX = pose->second * wX;
+      if (cX.z() > 0.) {
+        q.observedAt[i] = {static_cast<float>(K.fx * cX.x() / cX.z() + K.cx),
+                           static_cast<float>(K.fy * cX.y() / cX.z() + K.cy)};
+      }
+    }
     g.points.push_back(std::move(q));
   }
   g.points.shrink_to_fit();
@@ -203,8 +265,7 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
     mp.idepthPrior = match.idepth;
     mp.idepthPriorWeight = priorWeight;
     mp.fromGlobalMap = true;
-    mp.observers = oldHost->points[match.pointIndex].observers;
-    addObserver(mp.observers, match.keyframeId);
+    carryObservations(mp, oldHost->points[match.pointIndex], match.keyframeId);
     newest.points.push_back(std::move(mp));
     m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::reactivated);
     eraseImmature[ii] = true;
@@ -251,10 +312,7 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
       }
       p.fromGlobalMap = true;
       const GlobalKeyframe *oldHost = m_globalMap.find(match.keyframeId);
-      for (int o : oldHost->points[match.pointIndex].observers) {
-        addObserver(p.observers, o);
-      }
-      addObserver(p.observers, match.keyframeId);
+      carryObservations(p, oldHost->points[match.pointIndex], match.keyframeId);
       m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::fused);
       ++fused;
     }

@@ -70,9 +70,7 @@ void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vecto
   }
   for (GlobalKeyframe &kf : keyframes) {
     for (GlobalPoint &p : kf.points) {
-      p.observers.erase(
-          std::remove_if(p.observers.begin(), p.observers.end(), [&held](int id) { return held.count(id) == 0; }),
-          p.observers.end());
+      dropObservers(p, [&held](int id) { return held.count(id) == 0; });
     }
   }
   edges.erase(std::remove_if(edges.begin(), edges.end(),
