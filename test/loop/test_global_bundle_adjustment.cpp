@@ -1,7 +1,9 @@
 // Global inverse-depth bundle adjustment (issue 10): on a synthetic ring of keyframes with exact measurements,
 // perturbed poses and inverse depths are recovered; gross outliers are held off by the robust loss; bad input is
-// left out rather than crashing the solver.
+// left out rather than crashing the solver; the job built from a global map writes its solution back, and runs on
+// a thread of its own (real-time mode), where it can be cancelled.
 #include "loop/GlobalBundleAdjustment.h"
+#include "loop/GlobalBundleJob.h"
 
 #include "HSlamTestCameras.h"
 
@@ -9,8 +11,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <memory>
 #include <random>
 #include <vector>
 
@@ -89,9 +95,9 @@ TEST(GlobalBundleAdjustment, RecoversPerturbedPosesAndInverseDepths)
   for (int k = 0; k < 8; ++k) {
     // Keyframes 6 and 7 hold the gauge (the "window"); the rest start 5 cm / 1 degree off.
     const bool fixed = k >= 6;
-    ba.addKeyframe(k, fixed ? ring.cMw[static_cast<size_t>(k)] : perturbed(ring.cMw[static_cast<size_t>(k)], rng,
-                                                                            0.05, 0.017),
-                   fixed);
+    ba.addKeyframe(
+        k, fixed ? ring.cMw[static_cast<size_t>(k)] : perturbed(ring.cMw[static_cast<size_t>(k)], rng, 0.05, 0.017),
+        fixed);
   }
   std::vector<int> index;
   std::vector<double> truth;
@@ -130,9 +136,9 @@ TEST(GlobalBundleAdjustment, GrossOutliersAreHeldOffByTheRobustLoss)
   GlobalBundleAdjustment ba(ring.K);
   for (int k = 0; k < 8; ++k) {
     const bool fixed = k >= 6;
-    ba.addKeyframe(k,
-                   fixed ? ring.cMw[static_cast<size_t>(k)] : perturbed(ring.cMw[static_cast<size_t>(k)], rng, 0.03, 0.01),
-                   fixed);
+    ba.addKeyframe(
+        k, fixed ? ring.cMw[static_cast<size_t>(k)] : perturbed(ring.cMw[static_cast<size_t>(k)], rng, 0.03, 0.01),
+        fixed);
   }
   int outliers = 0, total = 0;
   for (size_t i = 0; i < ring.wX.size(); ++i) {
@@ -179,8 +185,8 @@ TEST(GlobalBundleAdjustment, UnusableInputIsLeftOut)
   }
   EXPECT_EQ(ba.addPoint(unmeasured), -1);
   BundlePoint behind = p;
-  behind.observations.push_back({p.hostId, p.u, p.v});  // the host itself: not an observation
-  behind.observations.push_back({99, 10., 10.});        // a keyframe not in the problem
+  behind.observations.push_back({p.hostId, p.u, p.v}); // the host itself: not an observation
+  behind.observations.push_back({99, 10., 10.});       // a keyframe not in the problem
   const int kept = ba.addPoint(behind);
   ASSERT_GE(kept, 0);
   // Exact data: nothing to do, and the solution is where it was.
@@ -192,5 +198,123 @@ TEST(GlobalBundleAdjustment, UnusableInputIsLeftOut)
   // An empty problem is a no-op.
   GlobalBundleAdjustment empty(ring.K);
   EXPECT_TRUE(empty.optimize(hslam::GlobalBundleOptions()).usable);
+}
+
+//! The ring as a global map: keyframes 0-5 stored (segment 0) at perturbed poses, 6 and 7 the "window".
+struct RingMap {
+  Ring ring{7};
+  hslam::GlobalMap map;
+  std::map<int, SE3d> window;
+
+  RingMap()
+  {
+    std::mt19937 rng(8);
+    for (int k = 0; k < 8; ++k) {
+      if (k >= 6) {
+        window[k] = ring.cMw[static_cast<size_t>(k)];
+        continue;
+      }
+      hslam::GlobalKeyframe kf;
+      kf.id = k;
+      kf.cMw = perturbed(ring.cMw[static_cast<size_t>(k)], rng, 0.03, 0.01);
+      for (size_t i = static_cast<size_t>(k); i < ring.wX.size(); i += 8) {
+        const BundlePoint b = ring.point(i);
+        hslam::GlobalPoint p;
+        p.u = static_cast<float>(b.u);
+        p.v = static_cast<float>(b.v);
+        p.idepth = static_cast<float>(b.idepth * 1.05);
+        p.idepthVar = 1e-4f;
+        p.isCorner = i % 2 == 0;
+        for (const BundlePoint::Observation &o : b.observations) {
+          p.observers.push_back(o.keyframeId);
+          p.observedAt.push_back({static_cast<float>(o.u), static_cast<float>(o.v)});
+        }
+        kf.points.push_back(p);
+      }
+      map.add(kf);
+    }
+  }
+
+  double worstCentreError() const
+  {
+    double worst = 0.;
+    for (const auto &entry : map.keyframes()) {
+      if (entry.second.segment != 0) {
+        continue; // not one of the ring's keyframes
+      }
+      const SE3d &T = entry.second.cMw;
+      const SE3d &truth = ring.cMw[static_cast<size_t>(entry.first)];
+      worst = std::max(worst, (T.inverse().translation() - truth.inverse().translation()).norm());
+    }
+    return worst;
+  }
+};
+
+TEST(GlobalBundleJob, BuildsFromTheGlobalMapAndWritesBack)
+{
+  RingMap rm;
+  hslam::GlobalBundleOptions options;
+  options.maxIterations = 30;
+  const double before = rm.worstCentreError();
+  ASSERT_GT(before, 0.02);
+  // Another segment's keyframes are not part of the job.
+  hslam::GlobalKeyframe other;
+  other.id = 50;
+  other.segment = 1;
+  rm.map.add(other);
+  std::unique_ptr<hslam::GlobalBundleJob> job = hslam::makeGlobalBundleJob(rm.map, 0, rm.window, rm.ring.K, options, 0);
+  EXPECT_EQ(job->keyframes, (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  job->run();
+  ASSERT_TRUE(job->summary.usable);
+  EXPECT_LT(job->summary.rmsAfterPx, 1e-3 * job->summary.rmsBeforePx);
+  EXPECT_EQ(hslam::applyGlobalBundleJob(*job, rm.map), (std::vector<int>{0, 1, 2, 3, 4, 5}));
+  // The map's keyframes are where they belong again (floats for the stored pixels: sub-millimetre, not exact).
+  EXPECT_LT(rm.worstCentreError(), 1e-3);
+
+  // A point budget per keyframe: only the most observed points are adjusted.
+  RingMap budget;
+  std::unique_ptr<hslam::GlobalBundleJob> small =
+      hslam::makeGlobalBundleJob(budget.map, 0, budget.window, budget.ring.K, options, 10);
+  EXPECT_EQ(small->problem.pointCount(), 60u);
+}
+
+TEST(BackgroundBundleAdjustment, RunsOnItsOwnThreadAndCanBeCancelled)
+{
+  RingMap rm;
+  hslam::GlobalBundleOptions options;
+  options.maxIterations = 30;
+  hslam::BackgroundBundleAdjustment background;
+  EXPECT_FALSE(background.running());
+  EXPECT_EQ(background.take(), nullptr);
+  // Started, then replaced by a second job (the first is cancelled), which is waited for.
+  background.start(hslam::makeGlobalBundleJob(rm.map, 0, rm.window, rm.ring.K, options, 0));
+  background.start(hslam::makeGlobalBundleJob(rm.map, 0, rm.window, rm.ring.K, options, 0));
+  EXPECT_TRUE(background.running());
+  std::unique_ptr<hslam::GlobalBundleJob> job = background.take();
+  ASSERT_NE(job, nullptr);
+  EXPECT_FALSE(background.running());
+  ASSERT_TRUE(job->summary.usable);
+  hslam::applyGlobalBundleJob(*job, rm.map);
+  EXPECT_LT(rm.worstCentreError(), 1e-3);
+  // Cancelled before it could end: nothing to take, nothing changed.
+  RingMap again;
+  const double before = again.worstCentreError();
+  hslam::GlobalBundleOptions many = options;
+  many.maxIterations = 1000;
+  background.start(hslam::makeGlobalBundleJob(again.map, 0, again.window, again.ring.K, many, 0));
+  background.cancel();
+  EXPECT_FALSE(background.running());
+  EXPECT_EQ(background.take(), nullptr);
+  EXPECT_EQ(again.worstCentreError(), before);
+  // A cancelled solve reports an unusable solution and keeps the estimates.
+  std::atomic<bool> stop{true};
+  hslam::GlobalBundleOptions stopped = options;
+  stopped.cancel = &stop;
+  std::unique_ptr<hslam::GlobalBundleJob> direct =
+      hslam::makeGlobalBundleJob(again.map, 0, again.window, again.ring.K, stopped, 0);
+  direct->run();
+  EXPECT_FALSE(direct->summary.usable);
+  EXPECT_TRUE(hslam::applyGlobalBundleJob(*direct, again.map).empty());
+  EXPECT_EQ(again.worstCentreError(), before);
 }
 } // namespace

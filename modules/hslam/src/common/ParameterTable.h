@@ -174,6 +174,10 @@ inline const Field kFields[] = {
   HSLAM_PARAM(loop, minInliers, atLeast(3), "Sim(3) inliers needed to accept a loop"),
   HSLAM_PARAM(loop, ransacThresholdPx, positive(), "Sim(3) inlier reprojection error, pixels"),
   HSLAM_PARAM(loop, maxRotationCorrectionDeg, between(0., 180.), "loops rotating the map more are refused, deg"),
+  HSLAM_PARAM(loop, globalBundleAdjustment, anyValue(), "refine stored poses and depths after a loop correction"),
+  HSLAM_PARAM(loop, globalBaIterations, atLeast(1), "iterations of the global bundle adjustment"),
+  HSLAM_PARAM(loop, globalBaHuberPx, positive(), "Huber threshold of the global bundle adjustment, pixels"),
+  HSLAM_PARAM(loop, globalBaPointsPerKeyframe, atLeast(0), "points per stored keyframe it adjusts (0 = all)"),
 
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),

@@ -10,6 +10,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 namespace hslam
 {
@@ -28,8 +29,7 @@ void pointInObserver(const T *host, const T *observer, const T *idepth, const Ei
   const T qhInverse[4] = {host[3], -host[0], -host[1], -host[2]};
   const T qo[4] = {observer[3], observer[0], observer[1], observer[2]};
   // rho X_w = R_h^T (ray - rho t_h)
-  const T a[3] = {T(ray.x()) - idepth[0] * host[4], T(ray.y()) - idepth[0] * host[5],
-                  T(ray.z()) - idepth[0] * host[6]};
+  const T a[3] = {T(ray.x()) - idepth[0] * host[4], T(ray.y()) - idepth[0] * host[5], T(ray.z()) - idepth[0] * host[6]};
   T w[3];
   ceres::UnitQuaternionRotatePoint(qhInverse, a, w);
   // rho X_o = R_o (rho X_w) + rho t_o
@@ -41,7 +41,7 @@ void pointInObserver(const T *host, const T *observer, const T *idepth, const Ei
 
 struct ReprojectionError {
   ReprojectionError(const PinholeIntrinsics &K, const Eigen::Vector3d &ray, double u, double v)
-    : K(K), ray(ray), u(u), v(v)
+      : K(K), ray(ray), u(u), v(v)
   {
   }
   template <typename T> bool operator()(const T *host, const T *observer, const T *idepth, T *residual) const
@@ -58,6 +58,19 @@ struct ReprojectionError {
   PinholeIntrinsics K;
   Eigen::Vector3d ray;
   double u, v;
+};
+//! Stops the solver when the caller asks (GlobalBundleOptions::cancel).
+class CancelCallback : public ceres::IterationCallback
+{
+public:
+  explicit CancelCallback(const std::atomic<bool> &cancel) : m_cancel(cancel) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary &) override
+  {
+    return m_cancel.load() ? ceres::SOLVER_ABORT : ceres::SOLVER_CONTINUE;
+  }
+
+private:
+  const std::atomic<bool> &m_cancel;
 };
 } // namespace
 
@@ -84,8 +97,7 @@ int GlobalBundleAdjustment::addPoint(const BundlePoint &point)
   const Eigen::Vector3d ray = m_K.unproject(p.u, p.v, 1.);
   for (const BundlePoint::Observation &o : point.observations) {
     auto observer = m_keyframes.find(o.keyframeId);
-    if (observer == m_keyframes.end() || o.keyframeId == point.hostId || !std::isfinite(o.u) ||
-        !std::isfinite(o.v)) {
+    if (observer == m_keyframes.end() || o.keyframeId == point.hostId || !std::isfinite(o.u) || !std::isfinite(o.v)) {
       continue;
     }
     double X[3];
@@ -163,9 +175,9 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   for (Point &p : m_points) {
     const Eigen::Vector3d ray = m_K.unproject(p.u, p.v, 1.);
     for (const BundlePoint::Observation &o : p.observations) {
-      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<ReprojectionError, 2, 7, 7, 1>(
-                                   new ReprojectionError(m_K, ray, o.u, o.v)),
-                               &loss, m_keyframes[p.host].x.data(), m_keyframes[o.keyframeId].x.data(), &p.idepth);
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<ReprojectionError, 2, 7, 7, 1>(new ReprojectionError(m_K, ray, o.u, o.v)),
+          &loss, m_keyframes[p.host].x.data(), m_keyframes[o.keyframeId].x.data(), &p.idepth);
     }
     problem.SetParameterLowerBound(&p.idepth, 0, kMinIdepth);
     ordering->AddElementToGroup(&p.idepth, 0);
@@ -188,13 +200,19 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   solverOptions.linear_solver_ordering.reset(ordering);
   solverOptions.num_threads = std::max(1, options.threads);
   solverOptions.logging_type = ceres::SILENT;
+  std::unique_ptr<CancelCallback> callback;
+  if (options.cancel) {
+    callback = std::make_unique<CancelCallback>(*options.cancel);
+    solverOptions.callbacks.push_back(callback.get());
+  }
   std::vector<double> idepthBackup;
   for (const Point &p : m_points) {
     idepthBackup.push_back(p.idepth);
   }
   ceres::Solver::Summary summary;
   ceres::Solve(solverOptions, &problem, &summary);
-  out.usable = summary.IsSolutionUsable();
+  out.usable = summary.IsSolutionUsable() && summary.termination_type != ceres::USER_FAILURE &&
+               !(options.cancel && options.cancel->load());
   for (const auto &k : m_keyframes) {
     for (double x : k.second.x) {
       out.usable = out.usable && std::isfinite(x);

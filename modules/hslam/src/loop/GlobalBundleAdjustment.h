@@ -32,6 +32,7 @@
 #include <visp3/core/vpConfig.h>
 
 #include <array>
+#include <atomic>
 #include <map>
 #include <vector>
 
@@ -54,6 +55,8 @@ struct GlobalBundleOptions {
   int maxIterations = 10; //!< Levenberg-Marquardt iterations
   double huberPx = 2.;    //!< Huber threshold on the reprojection error, pixels
   int threads = 1;        //!< Ceres threads
+  //! When set and true, the solver stops at its next iteration (the result is then not usable: nothing changes).
+  const std::atomic<bool> *cancel = nullptr;
 };
 
 //! What optimize() did.

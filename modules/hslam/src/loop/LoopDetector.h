@@ -25,6 +25,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <set>
 #include <utility>
 #include <vector>
@@ -53,6 +54,14 @@ struct LoopPoint {
   Eigen::Vector3d X = Eigen::Vector3d::Zero();
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();
   OrbDescriptor orb;
+  int keyframeId = -1;   //!< the point's host (window or stored keyframe)
+  size_t pointIndex = 0; //!< its index among the host's points
+};
+
+//! A verified loop match (a Sim(3) inlier): the same point seen from both sides, for fusing them (loop fusion).
+struct LoopPointMatch {
+  LoopPoint windowSide; //!< uv: in the keyframe that closed the loop
+  LoopPoint storedSide; //!< uv: in the candidate keyframe
 };
 
 //! Index pairs (into a, into b) of the ORB matches (see file comment).

@@ -4,7 +4,9 @@
 #include "map/GlobalMap.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <cstdlib>
+#include <limits>
 
 namespace hslam
 {
@@ -78,6 +80,26 @@ void GlobalMap::absorb(int keyframeId, size_t pointIndex, GlobalPointState state
   // The active point carries the observers on; this copy keeps only what history needs.
   std::vector<int>().swap(p.observers);
   std::vector<std::array<float, 2>>().swap(p.observedAt);
+}
+
+void GlobalMap::addObservation(int keyframeId, size_t pointIndex, int observerId, float u, float v)
+{
+  GlobalKeyframe *kf = find(keyframeId);
+  if (!kf || pointIndex >= kf->points.size() || observerId == keyframeId) {
+    return;
+  }
+  GlobalPoint &p = kf->points[pointIndex];
+  auto at = std::lower_bound(p.observers.begin(), p.observers.end(), observerId);
+  if (p.state != GlobalPointState::stored || (at != p.observers.end() && *at == observerId)) {
+    return;
+  }
+  const size_t index = static_cast<size_t>(at - p.observers.begin());
+  countShared(p, keyframeId, -1);
+  const float unknown = std::numeric_limits<float>::quiet_NaN();
+  p.observedAt.resize(p.observers.size(), {unknown, unknown});
+  p.observers.insert(at, observerId);
+  p.observedAt.insert(p.observedAt.begin() + static_cast<std::ptrdiff_t>(index), {u, v});
+  countShared(p, keyframeId, +1);
 }
 
 GlobalKeyframe *GlobalMap::find(int id)

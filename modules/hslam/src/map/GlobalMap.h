@@ -152,6 +152,13 @@ public:
   */
   void absorb(int keyframeId, size_t pointIndex, GlobalPointState state);
 
+  /*!
+    Keyframe \e observerId saw stored point \e pointIndex of keyframe \e keyframeId at pixel (u, v) (loop fusion): it
+    becomes an observer (co-visibility counted) with that measurement. No effect for a point that is not stored, its
+    own host, or an observer it already has.
+  */
+  void addObservation(int keyframeId, size_t pointIndex, int observerId, float u, float v);
+
   GlobalKeyframe *find(int id);
   const GlobalKeyframe *find(int id) const;
   const std::map<int, GlobalKeyframe> &keyframes() const { return m_keyframes; }

@@ -205,6 +205,7 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
 {
   Impl &m = *m_impl;
   const double t0 = threadCpuMs();
+  collectGlobalBundleAdjustment(false); // its keyframes' states go out with this keyframe's
   traceAll(*frame);
   const double t1 = threadCpuMs();
   frame->keyframeId = keyframeId;

@@ -47,6 +47,8 @@ struct RelocalizationKeyframe;
 struct RelocalizationFrame;
 struct PairInformation;
 struct Sim3Estimate;
+struct GlobalBundleJob;
+struct LoopPointMatch;
 
 class VISP_EXPORT LocalMapper
 {
@@ -141,19 +143,29 @@ public:
     double translationDrift = 0.; //!< |translation part of the correction| (map units)
   };
   struct LoopStatistics {
-    int candidatesVerified = 0;    //!< consistent candidates given to the Sim(3) verification
-    std::vector<LoopRecord> loops; //!< loops accepted
-    int corrected = 0;             //!< loops whose pose-graph correction was applied
-    int refusedImplausible = 0;    //!< verified loops refused for a rotation correction above the limit
-    double lastCorrectionMs = 0.;  //!< wall time of the last correction (graph, optimisation, map update)
-    double correctionMsMax = 0.;   //!< longest correction
-    int detections = 0;            //!< keyframes checked for a loop (database queried)
-    double detectionMsTotal = 0.;  //!< their wall time: query, consistency, verification (correction excluded)
-    double verificationMsMax = 0.; //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
+    int candidatesVerified = 0;      //!< consistent candidates given to the Sim(3) verification
+    std::vector<LoopRecord> loops;   //!< loops accepted
+    int corrected = 0;               //!< loops whose pose-graph correction was applied
+    int refusedImplausible = 0;      //!< verified loops refused for a rotation correction above the limit
+    double lastCorrectionMs = 0.;    //!< wall time of the last correction (graph, optimisation, map update)
+    double correctionMsMax = 0.;     //!< longest correction
+    int detections = 0;              //!< keyframes checked for a loop (database queried)
+    double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
+    double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
+    int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
+    int globalBaApplied = 0;         //!< ... and written back
+    double globalBaSecondsMax = 0.;  //!< longest of them, wall time, seconds
+    double globalBaRmsBeforePx = 0.; //!< reprojection RMS of the last one applied, before and after, pixels
+    double globalBaRmsAfterPx = 0.;
   };
   //! True while a loop correction runs (read by the tracking thread: tracking must not wait for it).
   bool correctingLoop() const { return m_correctingLoop.load(); }
   const LoopStatistics &loopStatistics() const { return m_loops; }
+  /*!
+    Real time: write back a background global bundle adjustment that has ended (or wait for the running one when
+    \e wait); true when one was collected (its keyframes' states are then to be taken).
+  */
+  bool collectGlobalBundleAdjustment(bool wait);
 
   // ---- map files (vpHSlam::saveMap / loadMap)
   /*!
@@ -220,7 +232,15 @@ private:
   //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.
   bool detectLoop(const Keyframe &newest);
   //! ORB matches between the window's points and the candidate's side, then the Sim(3) RANSAC.
-  Sim3Estimate verifyLoop(const Keyframe &newest, int candidate, int &matchCount) const;
+  //! \e inliers: the matches the accepted Sim(3) explains (empty when rejected).
+  Sim3Estimate verifyLoop(const Keyframe &newest, int candidate, int &matchCount,
+                          std::vector<LoopPointMatch> &inliers) const;
+  /*!
+    Loop fusion for the global bundle adjustment: each verified match makes the keyframe that closed the loop an
+    observer of the stored point (at the window point's pixel) and the candidate an observer of the window point (at
+    the stored point's pixel, carried until it leaves the window): measurements across the loop.
+  */
+  void fuseLoopMatches(int newestId, int candidate, const std::vector<LoopPointMatch> &inliers);
   /*!
     Correct the stored keyframes of the segment after a loop: Sim(3) pose graph (window keyframes fixed; pose-pose,
     strong co-visibility and every loop edge so far), then every stored keyframe's pose and its points' inverse depths
@@ -228,6 +248,12 @@ private:
     optimisation failed (nothing changed).
   */
   bool correctLoop(const Keyframe &newest, int candidate);
+  //! A stored keyframe moved: report its pose (and the scale of the move) and refresh its relocalisation points.
+  void publishStoredKeyframe(int id, double scale);
+  //! After a correction: the global bundle adjustment (loop.globalBundleAdjustment), in order when deterministic,
+  //! else in the background (collected by collectGlobalBundleAdjustment() at a later keyframe).
+  void startGlobalBundleAdjustment();
+  void finishGlobalBundleAdjustment(const GlobalBundleJob &job);
   //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
   void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
 

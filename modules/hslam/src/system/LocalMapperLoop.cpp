@@ -8,6 +8,7 @@
 
 #include "system/LocalMapperImpl.h"
 
+#include "loop/GlobalBundleJob.h"
 #include "loop/LoopDetector.h"
 #include "loop/PoseGraph.h"
 #include "loop/Sim3Solver.h"
@@ -114,9 +115,10 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     ++m_loops.candidatesVerified;
     int matches = 0;
     Sim3Estimate estimate;
+    std::vector<LoopPointMatch> inliers;
     const auto verificationStart = std::chrono::steady_clock::now();
     try {
-      estimate = verifyLoop(newest, candidate, matches);
+      estimate = verifyLoop(newest, candidate, matches, inliers);
       m_loops.verificationMsMax = std::max(
           m_loops.verificationMsMax,
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - verificationStart).count());
@@ -156,6 +158,7 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
     m.keyframeOfLastLoop = m.keyframesInSegment;
     m.loopConsistency.clear();
     m_loopEdges.push_back({candidate, newest.id(), estimate.S21});
+    fuseLoopMatches(newest.id(), candidate, inliers);
     bool corrected = false;
     const auto correctionStart = std::chrono::steady_clock::now();
     try {
@@ -176,8 +179,10 @@ bool LocalMapper::detectLoop(const Keyframe &newest)
   return false;
 }
 
-Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int &matchCount) const
+Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int &matchCount,
+                                     std::vector<LoopPointMatch> &inliers) const
 {
+  inliers.clear();
   const Impl &m = *m_impl;
   const vpHSlamParameters::Loop &p = m.params.loop;
   const PinholeIntrinsics &K = m.K0;
@@ -186,11 +191,14 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
   std::vector<LoopPoint> a;
   for (const KeyframePtr &host : m_window) {
     const SE3d newMhost = newest.frame->cMw * host->frame->cMw.inverse();
-    for (const MapPoint &pt : host->points) {
+    for (size_t i = 0; i < host->points.size(); ++i) {
+      const MapPoint &pt = host->points[i];
       if (pt.status != PointStatus::active || !pt.hasOrb || !pt.isCorner || !(pt.idepth > 0.)) {
         continue;
       }
       LoopPoint lp;
+      lp.keyframeId = host->id();
+      lp.pointIndex = i;
       lp.X = newMhost * (Eigen::Vector3d((pt.u - K.cx) / K.fx, (pt.v - K.cy) / K.fy, 1.) / pt.idepth);
       lp.orb = pt.orb;
       if (projectPoint(K, lp.X, lp.uv)) {
@@ -217,11 +225,14 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
   for (int id : side) {
     const GlobalKeyframe *g = m_globalMap.find(id);
     const SE3d cMg = c->cMw * g->cMw.inverse();
-    for (const GlobalPoint &pt : g->points) {
+    for (size_t i = 0; i < g->points.size(); ++i) {
+      const GlobalPoint &pt = g->points[i];
       if (pt.state != GlobalPointState::stored || !pt.hasOrb || !pt.isCorner || !(pt.idepth > 0.f)) {
         continue;
       }
       LoopPoint lp;
+      lp.keyframeId = id;
+      lp.pointIndex = i;
       lp.X = cMg * (Eigen::Vector3d((pt.u - K.cx) / K.fx, (pt.v - K.cy) / K.fy, 1.) / static_cast<double>(pt.idepth));
       lp.orb = pt.orb;
       if (projectPoint(K, lp.X, lp.uv)) {
@@ -248,7 +259,37 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
   options.minInliers = p.minInliers;
   options.maxReprojectionPx = p.ransacThresholdPx;
   options.seed = static_cast<unsigned int>(newest.id());
-  return estimateSim3Ransac(correspondences, K, K, options);
+  Sim3Estimate estimate = estimateSim3Ransac(correspondences, K, K, options);
+  if (estimate.success) {
+    for (size_t k = 0; k < pairs.size() && k < estimate.inliers.size(); ++k) {
+      if (estimate.inliers[k]) {
+        inliers.push_back({a[static_cast<size_t>(pairs[k].first)], b[static_cast<size_t>(pairs[k].second)]});
+      }
+    }
+  }
+  return estimate;
+}
+
+void LocalMapper::fuseLoopMatches(int newestId, int candidate, const std::vector<LoopPointMatch> &inliers)
+{
+  for (const LoopPointMatch &match : inliers) {
+    const LoopPoint &w = match.windowSide;
+    const LoopPoint &s = match.storedSide;
+    m_globalMap.addObservation(s.keyframeId, s.pointIndex, newestId, static_cast<float>(w.uv.x()),
+                               static_cast<float>(w.uv.y()));
+    for (const KeyframePtr &host : m_window) {
+      if (host->id() != w.keyframeId || w.pointIndex >= host->points.size() || candidate == host->id()) {
+        continue;
+      }
+      MapPoint &p = host->points[w.pointIndex];
+      addObserver(p.observers, candidate);
+      const bool known = std::any_of(p.carried.begin(), p.carried.end(),
+                                     [candidate](const PixelObservation &o) { return o.keyframeId == candidate; });
+      if (!known) {
+        p.carried.push_back({candidate, static_cast<float>(s.uv.x()), static_cast<float>(s.uv.y())});
+      }
+    }
+  }
 }
 
 bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
@@ -259,6 +300,10 @@ bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
     ~Flag() { flag = false; }
   } correcting{m_correctingLoop};
   m_correctingLoop = true;
+  // A global bundle adjustment of an earlier loop: written back if it has ended, else stopped (this correction
+  // moves its keyframes; a new one follows it).
+  collectGlobalBundleAdjustment(false);
+  m.globalBa.cancel();
   const auto t0 = std::chrono::steady_clock::now();
   PoseGraph graph;
   std::set<int> window;
@@ -354,29 +399,9 @@ bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
       p.idepth = static_cast<float>(p.idepth * s);
       p.idepthVar = static_cast<float>(p.idepthVar * s * s);
     }
-    KeyframeState state;
-    state.id = id;
-    state.wMc = g->cMw.inverse();
-    state.inWindow = false;
-    state.scale = s;
-    m.marginalizedStates.push_back(state);
-    if (m.relocalization) {
-      RelocalizationKeyframe points;
-      if (m.relocalization->keyframePoints(id, points)) {
-        points.wX.clear();
-        points.descriptors.clear();
-        const PinholeIntrinsics &K = m.K0;
-        for (const GlobalPoint &p : g->points) {
-          if (p.hasOrb && p.isCorner && p.idepth > 0.f) {
-            const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
-            points.wX.push_back(state.wMc * (ray / static_cast<double>(p.idepth)));
-            points.descriptors.push_back(p.orb);
-          }
-        }
-        m.relocalization->setKeyframePoints(id, std::move(points.wX), std::move(points.descriptors));
-      }
-    }
+    publishStoredKeyframe(id, s);
   }
+  ++m.correctionGeneration;
   m_loops.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   m_loops.correctionMsMax = std::max(m_loops.correctionMsMax, m_loops.lastCorrectionMs);
   VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop corrected, " << stored.size()
@@ -384,6 +409,94 @@ bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
                                              << " vertices, " << graph.edgeCount() << " edges, " << summary.iterations
                                              << " iterations, cost " << summary.initialCost << " -> "
                                              << summary.finalCost << "), " << m_loops.lastCorrectionMs << " ms");
+  startGlobalBundleAdjustment();
   return true;
+}
+
+void LocalMapper::publishStoredKeyframe(int id, double scale)
+{
+  Impl &m = *m_impl;
+  const GlobalKeyframe *g = m_globalMap.find(id);
+  KeyframeState state;
+  state.id = id;
+  state.wMc = g->cMw.inverse();
+  state.inWindow = false;
+  state.scale = scale;
+  m.marginalizedStates.push_back(state);
+  RelocalizationKeyframe points;
+  if (!m.relocalization || !m.relocalization->keyframePoints(id, points)) {
+    return;
+  }
+  points.wX.clear();
+  points.descriptors.clear();
+  for (const GlobalPoint &p : g->points) {
+    if (p.hasOrb && p.isCorner && p.idepth > 0.f) {
+      points.wX.push_back(state.wMc * m.K0.unproject(p.u, p.v, p.idepth));
+      points.descriptors.push_back(p.orb);
+    }
+  }
+  m.relocalization->setKeyframePoints(id, std::move(points.wX), std::move(points.descriptors));
+}
+
+void LocalMapper::startGlobalBundleAdjustment()
+{
+  Impl &m = *m_impl;
+  const vpHSlamParameters::Loop &p = m.params.loop;
+  if (!p.globalBundleAdjustment) {
+    return;
+  }
+  std::map<int, SE3d> windowPoses;
+  for (const KeyframePtr &kf : m_window) {
+    windowPoses[kf->id()] = kf->frame->cMw;
+  }
+  GlobalBundleOptions options;
+  options.maxIterations = p.globalBaIterations;
+  options.huberPx = p.globalBaHuberPx;
+  std::unique_ptr<GlobalBundleJob> job =
+      makeGlobalBundleJob(m_globalMap, m_segment, windowPoses, m.K0, options, p.globalBaPointsPerKeyframe);
+  job->generation = m.correctionGeneration;
+  ++m_loops.globalBaStarted;
+  if (m.params.system.deterministic) {
+    job->run(); // in order, inside track(): the same output run to run
+    finishGlobalBundleAdjustment(*job);
+  } else {
+    m.globalBa.start(std::move(job)); // a job of an earlier loop still running is cancelled
+  }
+}
+
+bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
+{
+  Impl &m = *m_impl;
+  if (!m.globalBa.running() || (!wait && !m.globalBa.finished())) {
+    return false;
+  }
+  std::unique_ptr<GlobalBundleJob> job = m.globalBa.take();
+  finishGlobalBundleAdjustment(*job);
+  return true;
+}
+
+void LocalMapper::finishGlobalBundleAdjustment(const GlobalBundleJob &job)
+{
+  Impl &m = *m_impl;
+  const GlobalBundleSummary &s = job.summary;
+  m_loops.globalBaSecondsMax = std::max(m_loops.globalBaSecondsMax, s.seconds);
+  if (job.generation != m.correctionGeneration) {
+    VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment dropped: the map was corrected again meanwhile");
+    return;
+  }
+  const std::vector<int> moved = applyGlobalBundleJob(job, m_globalMap);
+  for (int id : moved) {
+    publishStoredKeyframe(id, 1.);
+  }
+  if (!moved.empty()) {
+    ++m_loops.globalBaApplied;
+    m_loops.globalBaRmsBeforePx = s.rmsBeforePx;
+    m_loops.globalBaRmsAfterPx = s.rmsAfterPx;
+  }
+  VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment "
+                                     << (moved.empty() ? "failed" : "applied") << ": " << s.keyframes << " keyframes ("
+                                     << moved.size() << " moved), " << s.points << " points, " << s.observations
+                                     << " observations, " << s.iterations << " iterations, reprojection RMS "
+                                     << s.rmsBeforePx << " -> " << s.rmsAfterPx << " px, " << s.seconds << " s");
 }
 } // namespace hslam

@@ -84,6 +84,8 @@ public:
   std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
   vpHSlam::Statistics statistics() const;
   void synchronize();
+  //! synchronize(), then wait for a global bundle adjustment running in the background and write it back.
+  void finishBackgroundWork();
   void reset();
   void saveMap(const std::string &path);
   void loadMap(const std::string &path);
@@ -224,15 +226,9 @@ private:
   double m_snapshotMemoryMb = 0.;
   unsigned int m_snapshotKeyframesHeld = 0;
   double m_snapshotDescriptorKb = 0.;
-  double m_snapshotMarginalizedMb = 0.;         //!< memory held for keyframes that left the window
-  LocalMapper::ReuseStatistics m_snapshotReuse; //!< global map counters
-  int m_snapshotLoops = 0;                      //!< loops accepted (slam mode)
-  int m_snapshotLoopCandidates = 0;             //!< loop candidates verified
-  int m_snapshotLoopsCorrected = 0;             //!< loops corrected
-  double m_snapshotLoopMs = 0.;                 //!< last correction, ms
-  double m_snapshotLoopCorrectionMaxMs = 0.;    //!< longest correction, ms
-  double m_snapshotLoopDetectionMeanMs = 0.;    //!< loop detection per keyframe checked, ms
-  double m_snapshotLoopVerificationMaxMs = 0.;  //!< longest candidate verification, ms
+  double m_snapshotMarginalizedMb = 0.;            //!< memory held for keyframes that left the window
+  LocalMapper::ReuseStatistics m_snapshotReuse;    //!< global map counters
+  LocalMapper::LoopStatistics m_snapshotLoopStats; //!< loops (slam mode)
 };
 } // namespace hslam
 

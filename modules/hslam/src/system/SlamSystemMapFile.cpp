@@ -70,7 +70,7 @@ void SlamSystem::requireGlobalMap(const std::string &path, const char *operation
 void SlamSystem::saveMap(const std::string &path)
 {
   requireGlobalMap(path, "saveMap");
-  synchronize();
+  finishBackgroundWork(); // the map as the background bundle adjustment leaves it
   MapSnapshot map;
   map.camera = mapCamera();
   map.vocabularyId = m_vocabulary ? m_vocabulary->impl().fingerprint() : 0;

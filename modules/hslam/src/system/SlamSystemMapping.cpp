@@ -181,14 +181,16 @@ void SlamSystem::publishAfterKeyframe()
   m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
   m_snapshotMarginalizedMb = m_mapper->marginalizedMemoryBytes() / kBytesPerMegabyte;
   m_snapshotReuse = m_mapper->reuseStatistics();
-  m_snapshotLoops = static_cast<int>(m_mapper->loopStatistics().loops.size());
-  m_snapshotLoopCandidates = m_mapper->loopStatistics().candidatesVerified;
-  m_snapshotLoopsCorrected = m_mapper->loopStatistics().corrected;
-  const LocalMapper::LoopStatistics &loops = m_mapper->loopStatistics();
-  m_snapshotLoopMs = loops.lastCorrectionMs;
-  m_snapshotLoopCorrectionMaxMs = loops.correctionMsMax;
-  m_snapshotLoopDetectionMeanMs = loops.detections > 0 ? loops.detectionMsTotal / loops.detections : 0.;
-  m_snapshotLoopVerificationMaxMs = loops.verificationMsMax;
+  m_snapshotLoopStats = m_mapper->loopStatistics();
+}
+
+void SlamSystem::finishBackgroundWork()
+{
+  synchronize();
+  std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+  if (m_mapper->collectGlobalBundleAdjustment(true)) {
+    publishAfterKeyframe();
+  }
 }
 
 void SlamSystem::synchronize()

@@ -99,7 +99,7 @@ vpHSlam::Statistics vpHSlam::getStatistics() const
 
 void vpHSlam::synchronize()
 {
-  m_system->synchronize();
+  m_system->finishBackgroundWork();
 }
 
 void vpHSlam::reset()

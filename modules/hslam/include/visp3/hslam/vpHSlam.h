@@ -45,7 +45,9 @@ class SlamSystem;
     gives bit-identical poses every time; benchmarks and tests use it.
   - real time (default): mapping runs in its own thread, fed by a queue. track() never waits for mapping; when
     mapping falls behind, frames are skipped FOR MAPPING (they are still tracked and still have a pose) and the
-    newest frame is used for the next keyframe. synchronize() waits until mapping has consumed the queue.
+    newest frame is used for the next keyframe. synchronize() waits until mapping has consumed the queue. In slam
+    mode the global bundle adjustment that follows a loop correction runs on a third thread (tracking and mapping go
+    on); its result is written back at the next keyframe, or by synchronize(), which waits for it.
 
   Lost tracking: a frame whose direct alignment fails keeps the pose predicted by the motion model (as in DSO) but
   neither feeds mapping nor becomes a keyframe; after vpHSlamParameters::System::maxTrackingFailures such frames
@@ -129,25 +131,30 @@ public:
     double orbMatchesMedian = 0.;           //!< hybrid/indirect tracking: ORB matches per tracked frame, median
     double orbInliersMedian = 0.;           //!< the same, geometric inliers of the pose-only step, median
     double geometricWeightMedian = 0.;      //!< K of eq. 4 at the finest level, median over hybrid-tracked frames
-    unsigned int relocalizationsAttempted = 0;   //!< lost frames for which relocalisation was tried
-    unsigned int relocalizationsSucceeded = 0;   //!< relocalisations after which tracking resumed in the same map
-    double descriptorKbPerKeyframe = 0.;         //!< memory the descriptors add to a keyframe (points + BoW), KB
-    double marginalizedMemoryMb = 0.;            //!< held for keyframes that left the window (global map, index), MB
-    unsigned int marginalizedKeyframes = 0;      //!< keyframes kept in the global map (vo-reuse, slam)
-    unsigned int culledKeyframes = 0;            //!< of which culled: pose node only, out of co-visibility and database
-    unsigned int globalPoints = 0;               //!< points stored in the global map
-    double reactivatedPointsPerKeyframe = 0.;    //!< global points re-activated by early adoption, per keyframe
-    double fusedPointsPerKeyframe = 0.;          //!< global points absorbed by late fusion, per keyframe
-    double windowShareFromGlobal = 0.;           //!< share of the window's active points that came from the global map
-    unsigned int loopCandidatesVerified = 0;     //!< slam mode: consistent loop candidates given to the Sim(3) check
-    unsigned int loopsDetected = 0;              //!< slam mode: loops accepted by the Sim(3) check
-    unsigned int loopsCorrected = 0;             //!< slam mode: loops whose pose-graph correction was applied
-    double lastLoopCorrectionMs = 0.;            //!< slam mode: wall time of the last correction, milliseconds
-    double loopCorrectionMsMax = 0.;             //!< slam mode: longest correction (pose graph, map update), ms
-    double loopDetectionMsMean = 0.;             //!< slam mode: loop detection per keyframe (query, verification), ms
-    double loopVerificationMsMax = 0.;           //!< slam mode: longest verification of a candidate (Sim(3)), ms
-    unsigned int framesDuringLoopCorrection = 0; //!< real time: frames tracked while a correction ran
-    double trackingMsMaxDuringLoopCorrection = 0.; //!< real time: the longest of their tracking times, ms
+    unsigned int relocalizationsAttempted = 0; //!< lost frames for which relocalisation was tried
+    unsigned int relocalizationsSucceeded = 0; //!< relocalisations after which tracking resumed in the same map
+    double descriptorKbPerKeyframe = 0.;       //!< memory the descriptors add to a keyframe (points + BoW), KB
+    double marginalizedMemoryMb = 0.;          //!< held for keyframes that left the window (global map, index), MB
+    unsigned int marginalizedKeyframes = 0;    //!< keyframes kept in the global map (vo-reuse, slam)
+    unsigned int culledKeyframes = 0;          //!< of which culled: pose node only, out of co-visibility and database
+    unsigned int globalPoints = 0;             //!< points stored in the global map
+    double reactivatedPointsPerKeyframe = 0.;  //!< global points re-activated by early adoption, per keyframe
+    double fusedPointsPerKeyframe = 0.;        //!< global points absorbed by late fusion, per keyframe
+    double windowShareFromGlobal = 0.;         //!< share of the window's active points that came from the global map
+    unsigned int loopCandidatesVerified = 0;   //!< slam mode: consistent loop candidates given to the Sim(3) check
+    unsigned int loopsDetected = 0;            //!< slam mode: loops accepted by the Sim(3) check
+    unsigned int loopsCorrected = 0;           //!< slam mode: loops whose pose-graph correction was applied
+    double lastLoopCorrectionMs = 0.;          //!< slam mode: wall time of the last correction, milliseconds
+    double loopCorrectionMsMax = 0.;           //!< slam mode: longest correction (pose graph, map update), ms
+    double loopDetectionMsMean = 0.;           //!< slam mode: loop detection per keyframe (query, verification), ms
+    double loopVerificationMsMax = 0.;         //!< slam mode: longest verification of a candidate (Sim(3)), ms
+    unsigned int globalBundleAdjustments = 0;  //!< slam mode: global bundle adjustments started (one per correction)
+    unsigned int globalBundleAdjustmentsApplied = 0; //!< ... written back (not stopped by a newer loop, usable)
+    double globalBundleAdjustmentSecondsMax = 0.;    //!< the longest of them, wall time, seconds
+    double globalBundleAdjustmentRmsBeforePx = 0.;   //!< reprojection RMS of the last one applied, before, pixels
+    double globalBundleAdjustmentRmsAfterPx = 0.;    //!< ... and after, pixels
+    unsigned int framesDuringLoopCorrection = 0;     //!< real time: frames tracked while a correction ran
+    double trackingMsMaxDuringLoopCorrection = 0.;   //!< real time: the longest of their tracking times, ms
   };
 
   /*!
@@ -237,7 +244,10 @@ public:
   //! Counters and timings so far.
   Statistics getStatistics() const;
 
-  //! Real-time mode: block until mapping has processed every queued frame. Deterministic mode: no effect.
+  /*!
+    Real-time mode: block until mapping has processed every queued frame and a global bundle adjustment running in
+    the background has ended (its correction is then in getTrajectory()). Deterministic mode: no effect.
+  */
   void synchronize();
 
   //! Forget everything (map, trajectory, statistics) and start again with the next frame.

@@ -46,7 +46,7 @@ public:
   enum Mode {
     modeVoStrict, //!< window only, marginalised points discarded (DSO-like)
     modeVoReuse,  //!< global points re-used, no loop closure
-    modeSlam      //!< vo-reuse + loop detection, Sim(3) verification, pose-graph correction (no global BA yet)
+    modeSlam      //!< vo-reuse + loop detection, Sim(3) verification, pose-graph correction, global inverse-depth BA
   };
 
   //! Which errors the pose of a new frame minimises (paper section 3.2; the ablations of section 4).
@@ -183,6 +183,10 @@ public:
     int minInliers = 20;                   //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
     double ransacThresholdPx = 3.035;      //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
     double maxRotationCorrectionDeg = 30.; //!< a loop rotating the map more than this is refused (aliasing)
+    bool globalBundleAdjustment = true;    //!< after a loop's pose graph, refine stored poses and depths (background)
+    int globalBaIterations = 10;           //!< Levenberg-Marquardt iterations of the global bundle adjustment
+    double globalBaHuberPx = 2.;           //!< Huber threshold of its reprojection errors, pixels
+    int globalBaPointsPerKeyframe = 100;   //!< points of each stored keyframe it adjusts (most observed; 0 = all)
   };
 
   //! System-wide behaviour.
