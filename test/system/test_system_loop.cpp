@@ -7,6 +7,7 @@
 #include "SystemTestUtils.h"
 
 #include <visp3/hslam/vpHSlam.h>
+#include <visp3/hslam/vpHSlamTrajectoryEvaluator.h>
 
 #include <gtest/gtest.h>
 
@@ -58,6 +59,14 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
       EXPECT_GT(s.loopVerificationMsMax, 0.);
       EXPECT_GE(s.loopCorrectionMsMax, s.lastLoopCorrectionMs);
       EXPECT_GT(s.lastLoopCorrectionMs, 0.);
+      // The global bundle adjustment followed the correction and lowered the reprojection error.
+      EXPECT_EQ(s.globalBundleAdjustments, s.loopsCorrected);
+      EXPECT_GE(s.globalBundleAdjustmentsApplied, 1u);
+      EXPECT_LT(s.globalBundleAdjustmentRmsAfterPx, s.globalBundleAdjustmentRmsBeforePx);
+      // No frame far off: the frames before the initialisation, tracked backwards while the camera turned away
+      // from the map, stop where the map leaves the view (they went 0.4 m wrong before that check).
+      vpHSlamTrajectoryEvaluator evaluator(gt, slam.trajectory, 0.01);
+      EXPECT_LT(evaluator.computeAte(vpHSlamTrajectoryEvaluator::alignSim3).error.max, 0.1);
     }
     std::cout << "outward loop, budget " << budget << ": slam tracked " << s.trackedFrames << "/" << kFrames
               << ", loops " << s.loopsDetected << " (" << s.loopsCorrected << " corrected, detection "
@@ -70,7 +79,7 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
   std::sort(strictAte.begin(), strictAte.end());
   EXPECT_GE(runsWithLoop, 2);
   EXPECT_LT(slamAte[1], strictAte[1]);
-  EXPECT_LT(slamAte[1], 0.06);
+  EXPECT_LT(slamAte[1], 0.035);
 }
 
 TEST(SystemLoop, NoFalseLoopOnSequencesWithoutOne)
