@@ -53,9 +53,10 @@ if setarch "$(uname -m)" -R true 2>/dev/null; then
   no_aslr=(setarch "$(uname -m)" -R)
 fi
 targets=(test_window_threads test_worker_pool test_system_synthetic test_system_inputs test_system_tutorial
-  test_faults test_system_map_file tutorial-hslam-dataset)
-# Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping).
-threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals'
+  test_faults test_system_map_file test_system_loop test_global_bundle_adjustment tutorial-hslam-dataset)
+# Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping);
+# the global bundle adjustment's own thread (started, replaced, cancelled).
+threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals|BackgroundBundleAdjustment'
 echo "== ThreadSanitizer: building ${targets[*]} in $tsan${no_aslr[*]:+ (under ${no_aslr[*]})}"
 start=$(date +%s)
 configure "$tsan" -DHSLAM_SANITIZE=thread
