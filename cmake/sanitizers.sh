@@ -64,7 +64,7 @@ configure "$tsan" -DHSLAM_SANITIZE=thread
 echo "== ThreadSanitizer: running the threaded tests (built in $(($(date +%s) - start)) s)"
 start=$(date +%s)
 # OpenMP (the synthetic renderer) on one thread: libgomp is not instrumented, its own synchronisation is invisible.
-OMP_NUM_THREADS=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 \
+OMP_NUM_THREADS=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$repo/cmake/sanitizers/tsan.supp \
   "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== ThreadSanitizer: tests took $(($(date +%s) - start)) s"
 

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # The global map and loop closure (issues 9, 10): vo-strict (window only, DSO-like), vo-reuse (marginalised points
-# kept as a global map and re-used in the window) and slam (vo-reuse + loop detection and pose-graph correction) on
+# kept as a global map and re-used in the window) and slam (vo-reuse + loop detection, pose-graph
+# correction and global bundle adjustment) on
 # the shared real sequences and on synthetic sequences that drive the same loop several times, and the memory a
 # marginalised keyframe costs on a long run.
 #
@@ -9,12 +10,12 @@
 #
 # Runs are deterministic runs of tutorial-hslam-dataset evaluated with tutorial-hslam-evaluate (Sim(3) ATE). Sections:
 #   real    per shared sequence, tracking mode (TRACKING) and map mode (MODES): median ATE of the runs with
-#           features.desiredImmatureDensity = 490 495 500 505 510 (one run says little: see the hybrid benchmark's
+#           features.desiredImmatureDensity in BUDGETS (one run says little: see the hybrid benchmark's
 #           spread), the runs' ATEs, mapping ms per keyframe (median of the runs' medians), re-activated and fused
 #           global points per keyframe, share of the window's points from the global map, culled keyframes,
 #           loops detected (sum over the runs: these sequences have none)
 #   loop    the synthetic room filmed wall after wall (--look-outward), 2 laps of 400 frames, 320x240 with the effects
-#           below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same 5 runs and
+#           below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same runs and
 #           medians as "real", plus loops detected / corrected and the longest correction
 #   laps    synthetic room (tutorial-hslam-synthetic, LAP_FRAMES frames a lap, LAPS laps, 320x240, noise, motion
 #           blur, exposure changes, vignette, response) per tracking and map mode: ATE, the drift between start and
@@ -30,7 +31,8 @@
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-map-bench), SEQUENCES, TRACKING
 # (default "hybrid direct"), MODES (default "vo-strict vo-reuse slam"), SECTIONS (default "real loop laps
 # localization memory"),
-# LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000).
+# LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000), BUDGETS (the point budgets
+# features.desiredImmatureDensity of the runs whose median is reported, default "490 495 500 505 510").
 set -uo pipefail # not -e: one failed run must not end the benchmark
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -50,6 +52,8 @@ map_modes="${MODES:-vo-strict vo-reuse slam}"
 laps_list="${LAPS:-2 3}"
 lap_frames="${LAP_FRAMES:-300}"
 soak_frames="${SOAK_FRAMES:-4000}"
+budgets="${BUDGETS:-490 495 500 505 510}"
+read -r -a budget_list <<< "$budgets"
 source "$repo/tutorials/benchmark-common.sh"
 
 sum_json() { # KEY PREFIX... -> sum of the key over the runs' statistics
@@ -76,7 +80,7 @@ reuse_columns() { # PREFIX... -> medians of the re-use statistics of the runs
 }
 
 if has_section real; then
-  echo "== real sequences: median of 5 runs (point budget 490..510)"
+  echo "== real sequences: median of ${#budget_list[@]} runs (point budgets $budgets)"
   printf "%-28s %-7s %-9s %9s %8s %7s %7s %7s %7s %5s   %s\n" sequence track map ate map_ms react fused share culled \
     loops runs
   for seq in $sequences; do
@@ -85,7 +89,7 @@ if has_section real; then
       for mode in $map_modes; do
         ates=()
         prefixes=()
-        for value in 490 495 500 505 510; do
+        for value in $budgets; do
           prefix="$out/$seq.$track.$mode.p$value"
           if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" \
             --set "features.desiredImmatureDensity=$value"; then
@@ -108,7 +112,7 @@ if has_section loop; then
   synthetic="$build/tutorials/tutorial-hslam-synthetic"
   seq="$out/synthetic-outward-2laps"
   echo "== loop: the room filmed wall after wall, 2 laps of 400 frames (320x240, noise 4, blur, exposure, vignette,"
-  echo "   response); median of 5 runs (point budget 490..510)"
+  echo "   response); median of ${#budget_list[@]} runs (point budgets $budgets)"
   if [[ ! -f "$seq/complete" ]]; then
     rm -rf "$seq"
     "$synthetic" --output "$seq" --frames 801 --laps 2 --look-outward --width 320 --height 240 --noise 4 \
@@ -121,7 +125,7 @@ if has_section loop; then
     for mode in $map_modes; do
       ates=()
       prefixes=()
-      for value in 490 495 500 505 510; do
+      for value in $budgets; do
         prefix="$out/outward.$track.$mode.p$value"
         if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" --set "features.desiredImmatureDensity=$value"; then
           ates+=("$(ate "$prefix")")
