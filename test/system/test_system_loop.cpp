@@ -32,6 +32,15 @@ vpHSlamParameters fastPreset(vpHSlamParameters::Mode mode)
   params.system.mode = mode;
   return params;
 }
+
+//! The look-outward room, 2 laps, with noise, motion blur, exposure changes, vignette and response (made once).
+std::string outwardLoop()
+{
+  vpHSlamSyntheticScene::Effects effects;
+  effects.noiseSigma = 4.;
+  effects.motionBlur = effects.exposureChanges = effects.vignette = effects.response = true;
+  return hslam_test::syntheticSequence(kWidth, kHeight, kFrames, kSeed, kLaps, true, effects);
+}
 } // namespace
 
 TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
@@ -39,10 +48,7 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
   if (hslam_test::vispImagesDir().empty()) {
     GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
   }
-  vpHSlamSyntheticScene::Effects effects;
-  effects.noiseSigma = 4.;
-  effects.motionBlur = effects.exposureChanges = effects.vignette = effects.response = true;
-  const std::string dir = hslam_test::syntheticSequence(kWidth, kHeight, kFrames, kSeed, kLaps, true, effects);
+  const std::string dir = outwardLoop();
   const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(dir + "/groundtruth.txt");
   // One deterministic run says little (a 2 % change of the point budget moves it a lot, and about one run in five
   // loses the scale before the revisit, slam or not): three budgets, compared by their medians.
@@ -113,14 +119,11 @@ TEST(SystemLoop, RealTimeLoopCorrectionRunsBesideTracking)
   // global bundle adjustment on a third one while tracking goes on (run under ThreadSanitizer in CI). Whether the
   // loop is found depends on scheduling (mapping skips frames when it falls behind), so only what must always hold
   // is checked: every frame processed, one bundle adjustment per correction, the last one written back by
-  // synchronize(), tracking never waiting for a correction.
+  // synchronize().
   if (hslam_test::vispImagesDir().empty()) {
     GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
   }
-  vpHSlamSyntheticScene::Effects effects;
-  effects.noiseSigma = 4.;
-  effects.motionBlur = effects.exposureChanges = effects.vignette = effects.response = true;
-  const std::string dir = hslam_test::syntheticSequence(kWidth, kHeight, kFrames, kSeed, kLaps, true, effects);
+  const std::string dir = outwardLoop();
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
   vpHSlamParameters params = fastPreset(vpHSlamParameters::modeSlam);
   params.system.deterministic = false;
