@@ -131,15 +131,17 @@ TEST(SystemSynthetic, RecoversFromLostTrackingWithANewSegment)
   EXPECT_TRUE(keyframes.back().inWindow);
 }
 
-TEST(SystemSynthetic, CoveredLensIsRelocalisedInTheSameMap)
+namespace
 {
-  // The covered lens of the previous test with hybrid tracking and relocalisation on: the frames after it are matched
-  // to the keyframes seen before (BoW, ORB, PnP) and tracking resumes in the same map and segment.
+/*!
+  The covered lens of the previous test with relocalisation on: the frames after it are matched to the keyframes seen
+  before (BoW, ORB, PnP) and tracking resumes in the same map and segment.
+*/
+void expectCoveredLensRelocalised(const vpHSlamParameters &params)
+{
   HSLAM_REQUIRE_SYNTHETIC(dir);
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
-  vpHSlamParameters params = parameters(true);
   ASSERT_TRUE(params.tracking.relocalize);
-  params.tracking.mode = vpHSlamParameters::trackingHybrid; // relocalisation needs descriptors
   vpHSlam slam(*source, params);
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
@@ -171,6 +173,24 @@ TEST(SystemSynthetic, CoveredLensIsRelocalisedInTheSameMap)
   EXPECT_LE(firstTrackedAfter, 10) << "tracking back within 10 frames of the images returning";
   EXPECT_EQ(after.back(), vpHSlam::stateTracking);
   EXPECT_GE(stats.lostFrames, 1u);
+}
+} // namespace
+
+TEST(SystemSynthetic, CoveredLensIsRelocalisedInTheSameMap)
+{
+  vpHSlamParameters params = parameters(true);
+  params.tracking.mode = vpHSlamParameters::trackingHybrid; // every frame described
+  expectCoveredLensRelocalised(params);
+}
+
+TEST(SystemSynthetic, CoveredLensIsRelocalisedWithDirectTrackingInSlamMode)
+{
+  // Direct tracking describes no frame while it tracks; in slam mode (keyframes indexed for loop detection) a lost
+  // camera's frames are described and relocalised all the same.
+  vpHSlamParameters params = parameters(true);
+  params.system.mode = vpHSlamParameters::modeSlam;
+  ASSERT_EQ(params.tracking.mode, vpHSlamParameters::trackingDirect);
+  expectCoveredLensRelocalised(params);
 }
 
 TEST(SystemSynthetic, RealTimeHybridCoveredLensKeepsTracking)

@@ -61,7 +61,10 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                            m_preprocessor.height(), calibrated,
                                            m_vocabulary ? &m_vocabulary->impl() : nullptr);
-  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect || m_params.system.localizationOnly) {
+  // The frame's ORB features: hybrid / indirect tracking, localisation-only, and relocalisation in slam mode with
+  // direct tracking (frames are then described only while the camera is lost).
+  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect || m_params.system.localizationOnly ||
+      (m_params.system.mode == vpHSlamParameters::modeSlam && m_params.tracking.relocalize)) {
     m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                                m_preprocessor.height());
   }
@@ -418,9 +421,11 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
 bool SlamSystem::estimatePose(const FramePtr &frame, CoarseMotionHistory history, SE3d &newMref,
                               AffineBrightness &affine, CoarseTrackingResult &result)
 {
-  if (!m_hybrid) {
+  if (!m_hybrid || (m_params.tracking.mode == vpHSlamParameters::trackingDirect && !m_relocalizing)) {
     return m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
   }
+  // Hybrid / indirect tracking, or a lost camera with direct tracking: the joint step, whose ORB inliers confirm a
+  // relocalised pose.
   const bool indirectOnly = m_params.tracking.mode == vpHSlamParameters::trackingIndirect;
   m_hybrid->extract(frame->raw);
   m_hybrid->indirectStep(m_tracker->referenceFeatures(), CoarseTracker::predictConstantVelocity(history), m_indirect);
