@@ -98,7 +98,7 @@ MapSnapshot sampleMap(int keyframes, int pointsPerKeyframe, unsigned seed)
           // A pixel for each observer; some unknown (NaN), as a point projected behind an observer leaves.
           const float nan = std::numeric_limits<float>::quiet_NaN();
           p.observedAt.push_back(bits(rng) % 7 == 0 ? std::array<float, 2>{nan, nan}
-                                                     : std::array<float, 2>{uu(rng), uv(rng)});
+                                                    : std::array<float, 2>{uu(rng), uv(rng)});
         }
       }
       kf.points.push_back(p);

@@ -76,8 +76,7 @@ double finite(double x, const std::string &path, const char *what)
   return x;
 }
 
-void readPoint(ByteReader &r, const MapCamera &camera, std::uint32_t version, const std::string &path,
-               GlobalPoint &p)
+void readPoint(ByteReader &r, const MapCamera &camera, std::uint32_t version, const std::string &path, GlobalPoint &p)
 {
   p.u = static_cast<float>(finite(r.f32("a point's pixel"), path, "point pixel"));
   p.v = static_cast<float>(finite(r.f32("a point's pixel"), path, "point pixel"));
