@@ -9,8 +9,8 @@
   What it is for: after a loop correction (paper sec. 3.4) the stored keyframes of the segment and their stored
   points are refined against the pixels their observers saw them at (GlobalPoint::observedAt). The window's keyframes
   are held (fixed): the window's priors stay valid and they hold the gauge. The job copies everything it needs, so
-  the mapper goes on while it runs; it is written back only when the map's keyframes have not been moved since it
-  was built (the caller keeps a generation count of corrections for that).
+  the mapper goes on while it runs; a newer correction, which moves the same keyframes, cancels it before it could be
+  written back (LocalMapper::correctLoop), so a job that ends is never stale.
 
   Threading: BackgroundBundleAdjustment runs at most one job on its own thread (the "third thread" of real-time
   mode); start / finished / take / cancel are called from one thread (the mapping thread).
@@ -30,6 +30,7 @@
 
 namespace hslam
 {
+//! One global bundle adjustment: the problem built from the map, where each of its points came from, its result.
 struct GlobalBundleJob {
   explicit GlobalBundleJob(const PinholeIntrinsics &K) : problem(K) {}
   GlobalBundleAdjustment problem;
@@ -37,7 +38,6 @@ struct GlobalBundleJob {
   std::vector<int> keyframes;                 //!< stored keyframes it may move
   std::vector<std::pair<int, size_t>> points; //!< per problem point: (host id, index in its points)
   std::vector<int> pointIndex;                //!< per entry of points: index in the problem
-  long generation = 0;                        //!< the caller's correction count when it was built
   GlobalBundleSummary summary;                //!< filled by run()
   void run() { summary = problem.optimize(options); }
 };

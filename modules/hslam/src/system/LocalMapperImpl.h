@@ -80,7 +80,6 @@ struct LocalMapper::Impl {
   LoopConsistency loopConsistency;                          //!< candidate groups of the last loop queries
   int keyframeOfLastLoop = 0;                               //!< keyframesInSegment when the last loop was accepted
   std::map<int, std::vector<PairInformation>> pendingPairs; //!< pose-pose links of the keyframes being marginalised
-  long correctionGeneration = 0;                            //!< loop corrections applied (stale global BA check)
   //! Real time: the global bundle adjustment's thread (cancelled with this state: clear(), reset(), destruction).
   BackgroundBundleAdjustment globalBa;
 };

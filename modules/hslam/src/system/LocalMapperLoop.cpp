@@ -401,7 +401,6 @@ bool LocalMapper::correctLoop(const Keyframe &newest, int candidate)
     }
     publishStoredKeyframe(id, s);
   }
-  ++m.correctionGeneration;
   m_loops.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   m_loops.correctionMsMax = std::max(m_loops.correctionMsMax, m_loops.lastCorrectionMs);
   VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << newest.id() << ": loop corrected, " << stored.size()
@@ -454,7 +453,6 @@ void LocalMapper::startGlobalBundleAdjustment()
   options.huberPx = p.globalBaHuberPx;
   std::unique_ptr<GlobalBundleJob> job =
       makeGlobalBundleJob(m_globalMap, m_segment, windowPoses, m.K0, options, p.globalBaPointsPerKeyframe);
-  job->generation = m.correctionGeneration;
   ++m_loops.globalBaStarted;
   if (m.params.system.deterministic) {
     job->run(); // in order, inside track(): the same output run to run
@@ -477,13 +475,8 @@ bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
 
 void LocalMapper::finishGlobalBundleAdjustment(const GlobalBundleJob &job)
 {
-  Impl &m = *m_impl;
   const GlobalBundleSummary &s = job.summary;
   m_loops.globalBaSecondsMax = std::max(m_loops.globalBaSecondsMax, s.seconds);
-  if (job.generation != m.correctionGeneration) {
-    VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment dropped: the map was corrected again meanwhile");
-    return;
-  }
   const std::vector<int> moved = applyGlobalBundleJob(job, m_globalMap);
   for (int id : moved) {
     publishStoredKeyframe(id, 1.);
