@@ -282,6 +282,13 @@ TEST(SyntheticScene, DeterministicForASeed)
   }
   EXPECT_NE(readFile(dirs[0] + "/groundtruth.txt"), readFile(dirs[2] + "/groundtruth.txt"));
   EXPECT_NE(readFile(dirs[0] + "/rgb/000001.png"), readFile(dirs[2] + "/rgb/000001.png"));
+  // Written again over another sequence (as `bash cmake/run.sh demo` run twice does): the same files as fresh.
+  vpHSlamSyntheticScene again;
+  again.configure(kWidth, kHeight, frames, 30.0, seeds[0], effects);
+  ASSERT_NO_THROW(again.writeSequence(dirs[2]));
+  for (const std::string &f : files) {
+    EXPECT_EQ(readFile(dirs[0] + "/" + f), readFile(dirs[2] + "/" + f)) << f << " differs after writing over";
+  }
   for (const std::string &d : dirs) {
     vpIoTools::remove(d);
   }

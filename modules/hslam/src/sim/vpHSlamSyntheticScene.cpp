@@ -375,6 +375,9 @@ void vpHSlamSyntheticScene::writeSequence(const std::string &dir) const
   checkStream(camOut, cameraFile);
 
   const std::string xmlFile = dir + "/camera.xml";
+  if (vpIoTools::checkFilename(xmlFile)) {
+    vpIoTools::remove(xmlFile); // ViSP's writer refuses to replace a camera already in the file: write anew
+  }
   vpXmlParserCamera xml;
   if (xml.save(cam, xmlFile, "Camera", m_width, m_height) != vpXmlParserCamera::SEQUENCE_OK) {
     throw vpHSlamException(vpHSlamException::invalidArgument, "synthetic scene: cannot write file '" + xmlFile + "'");
