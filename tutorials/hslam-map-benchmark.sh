@@ -14,8 +14,8 @@
 #           spread), the runs' ATEs, mapping ms per keyframe (median of the runs' medians), re-activated and fused
 #           global points per keyframe, share of the window's points from the global map, culled keyframes,
 #           loops detected (sum over the runs: these sequences have none)
-#   loop    the synthetic room filmed wall after wall (--look-outward), 2 laps of 400 frames, 320x240 with the effects
-#           below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same runs and
+#   loop    the synthetic room filmed wall after wall (--look-outward), LOOP_LAPS laps of 400 frames, 320x240 with
+#           the effects below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same runs and
 #           medians as "real", plus loops detected / corrected and the longest correction
 #   laps    synthetic room (tutorial-hslam-synthetic, LAP_FRAMES frames a lap, LAPS laps, 320x240, noise, motion
 #           blur, exposure changes, vignette, response) per tracking and map mode: ATE, the drift between start and
@@ -31,7 +31,7 @@
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-map-bench), SEQUENCES, TRACKING
 # (default "hybrid direct"), MODES (default "vo-strict vo-reuse slam"), SECTIONS (default "real loop laps
 # localization memory"),
-# LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000), BUDGETS (the point budgets
+# LOOP_LAPS (laps of the outward loop, default "2 3"), LAPS (default "2 3"), LAP_FRAMES (default 300), SOAK_FRAMES (default 4000), BUDGETS (the point budgets
 # features.desiredImmatureDensity of the runs whose median is reported, default "490 495 500 505 510").
 set -uo pipefail # not -e: one failed run must not end the benchmark
 
@@ -50,6 +50,7 @@ tracking_modes="${TRACKING:-hybrid direct}"
 sections="${SECTIONS:-real loop laps localization memory}"
 map_modes="${MODES:-vo-strict vo-reuse slam}"
 laps_list="${LAPS:-2 3}"
+loop_laps_list="${LOOP_LAPS:-2 3}"
 lap_frames="${LAP_FRAMES:-300}"
 soak_frames="${SOAK_FRAMES:-4000}"
 budgets="${BUDGETS:-490 495 500 505 510}"
@@ -110,51 +111,56 @@ fi
 
 if has_section loop; then
   synthetic="$build/tutorials/tutorial-hslam-synthetic"
-  seq="$out/synthetic-outward-2laps"
-  echo "== loop: the room filmed wall after wall, 2 laps of 400 frames (320x240, noise 4, blur, exposure, vignette,"
-  echo "   response); median of ${#budget_list[@]} runs (point budgets $budgets)"
-  if [[ ! -f "$seq/complete" ]]; then
-    rm -rf "$seq"
-    "$synthetic" --output "$seq" --frames 801 --laps 2 --look-outward --width 320 --height 240 --noise 4 \
-      --motion-blur --exposure-changes --vignette --response > "$out/synthetic-outward.log" 2>&1 &&
-      touch "$seq/complete" || echo "outward loop: generation failed, see $out/synthetic-outward.log"
-  fi
-  printf "%-7s %-9s %9s %10s %8s %12s %7s %7s %10s   %s\n" track map ate tracked map_ms loops/corr det_ms \
-    max_ver max_corr_ms runs
-  for track in $tracking_modes; do
-    for mode in $map_modes; do
-      ates=()
-      prefixes=()
-      for value in $budgets; do
-        prefix="$out/outward.$track.$mode.p$value"
-        if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" --set "features.desiredImmatureDensity=$value"; then
-          ates+=("$(ate "$prefix")")
-          prefixes+=("$prefix")
-        else
-          ates+=(nan)
-        fi
+  for loop_laps in $loop_laps_list; do
+    loop_frames=$((loop_laps * 400 + 1))
+    seq="$out/synthetic-outward-${loop_laps}laps"
+    echo "== loop: the room filmed wall after wall, $loop_laps laps of 400 frames (320x240, noise 4, blur, exposure,"
+    echo "   vignette, response); median of ${#budget_list[@]} runs (point budgets $budgets)"
+    if [[ ! -f "$seq/complete" ]]; then
+      rm -rf "$seq"
+      "$synthetic" --output "$seq" --frames "$loop_frames" --laps "$loop_laps" --look-outward --width 320 \
+        --height 240 --noise 4 --motion-blur --exposure-changes --vignette --response \
+        > "$out/synthetic-outward-$loop_laps.log" 2>&1 && touch "$seq/complete" ||
+        echo "outward loop: generation failed, see $out/synthetic-outward-$loop_laps.log"
+    fi
+    printf "%-7s %-9s %9s %10s %8s %12s %7s %7s %10s   %s\n" track map ate tracked map_ms loops/corr det_ms \
+      max_ver max_corr_ms runs
+    for track in $tracking_modes; do
+      for mode in $map_modes; do
+        ates=()
+        prefixes=()
+        for value in $budgets; do
+          prefix="$out/outward$loop_laps.$track.$mode.p$value"
+          if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" \
+            --set "features.desiredImmatureDensity=$value"; then
+            ates+=("$(ate "$prefix")")
+            prefixes+=("$prefix")
+          else
+            ates+=(nan)
+          fi
+        done
+        [[ ${#prefixes[@]} -gt 0 ]] || continue
+        maps=()
+        tracks=()
+        detections=()
+        worst=0
+        verification=0
+        for p in "${prefixes[@]}"; do
+          maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
+          tracks+=("$(json "$p.json" tracked_frames)")
+          detections+=("$(json "$p.json" loop_detection_ms_mean)")
+          worst="$(awk -v a="$worst" -v b="$(json "$p.json" loop_correction_ms_max)" 'BEGIN { print (b > a ? b : a) }')"
+          verification="$(awk -v a="$verification" -v b="$(json "$p.json" loop_verification_ms_max)" \
+            'BEGIN { print (b > a ? b : a) }')"
+        done
+        printf "%-7s %-9s %9.4f %10s %8.2f %12s %7.2f %7.1f %10.1f   %s\n" "$track" "$mode" \
+          "$(median "${ates[@]}")" "$(median "${tracks[@]}")/$loop_frames" "$(median "${maps[@]}")" \
+          "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" \
+          "$(median "${detections[@]}")" "$verification" "$worst" "${ates[*]}"
       done
-      [[ ${#prefixes[@]} -gt 0 ]] || continue
-      maps=()
-      tracks=()
-      detections=()
-      worst=0
-      verification=0
-      for p in "${prefixes[@]}"; do
-        maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
-        tracks+=("$(json "$p.json" tracked_frames)")
-        detections+=("$(json "$p.json" loop_detection_ms_mean)")
-        worst="$(awk -v a="$worst" -v b="$(json "$p.json" loop_correction_ms_max)" 'BEGIN { print (b > a ? b : a) }')"
-        verification="$(awk -v a="$verification" -v b="$(json "$p.json" loop_verification_ms_max)" \
-          'BEGIN { print (b > a ? b : a) }')"
-      done
-      printf "%-7s %-9s %9.4f %10s %8.2f %12s %7.2f %7.1f %10.1f   %s\n" "$track" "$mode" "$(median "${ates[@]}")" \
-        "$(median "${tracks[@]}")/801" "$(median "${maps[@]}")" \
-        "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" \
-        "$(median "${detections[@]}")" "$verification" "$worst" "${ates[*]}"
     done
+    echo
   done
-  echo
 fi
 
 if has_section laps; then

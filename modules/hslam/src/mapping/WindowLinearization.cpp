@@ -84,15 +84,25 @@ void linearizeRange(const WindowContext &ctx, std::vector<WindowPoint> &points, 
       ++acc.inliers;
       ++inliers;
       // J^T W J and J^T W r over the 8 pattern pixels (9 columns: relative pose, alpha, beta, rho).
-      Mat9d H = Mat9d::Zero();
-      Vec9d b = Vec9d::Zero();
-      for (int k = 0; k < kPatternSize; ++k) {
-        const Vec9d Jk = lin.J.row(k).transpose();
-        const double w = lin.weight[static_cast<size_t>(k)];
-        H.selfadjointView<Eigen::Upper>().rankUpdate(Jk, w);
-        b += (w * lin.r[static_cast<size_t>(k)]) * Jk;
+      // Plain loops over the upper triangle: Eigen sends this small product (or eight rank-1 updates) through its
+      // general matrix kernels, which cost 4 % of a whole slam run.
+      Mat9d H;
+      Vec9d b;
+      for (int c = 0; c < kRelativeDims; ++c) {
+        double bc = 0.;
+        for (int k = 0; k < kPatternSize; ++k) {
+          bc += lin.weight[static_cast<size_t>(k)] * lin.r[static_cast<size_t>(k)] * lin.J(k, c);
+        }
+        b[c] = bc;
+        for (int d = c; d < kRelativeDims; ++d) {
+          double h = 0.;
+          for (int k = 0; k < kPatternSize; ++k) {
+            h += lin.weight[static_cast<size_t>(k)] * lin.J(k, c) * lin.J(k, d);
+          }
+          H(c, d) = h;
+          H(d, c) = h;
+        }
       }
-      H.triangularView<Eigen::StrictlyLower>() = H.transpose();
       const size_t block = static_cast<size_t>(p.host * kMaxWindowKeyframes + res.target);
       acc.pairH[block] += H.topLeftCorner<kFrameDims, kFrameDims>();
       acc.pairB[block] += b.head<kFrameDims>();
