@@ -8,6 +8,7 @@
 #include <ceres/ceres.h>
 #include <ceres/rotation.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -171,20 +172,33 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   ceres::Problem problem(problemOptions);
   ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>> poseManifold;
   ceres::HuberLoss loss(options.huberPx);
+  // The poses are solved in one contiguous buffer in keyframe-id order (the points already are, in m_points): Ceres
+  // orders the blocks of an elimination group by address, and map nodes' addresses depend on what the heap held
+  // before, so the same problem summed in another order ended 1e-6 apart and diverged later (a slam run's output
+  // changed with the dataset program's progress line).
+  std::vector<std::array<double, 7>> poses;
+  std::map<int, double *> block;
+  poses.reserve(m_keyframes.size());
+  for (const auto &k : m_keyframes) {
+    poses.push_back(k.second.x);
+  }
+  size_t next = 0;
+  for (const auto &k : m_keyframes) {
+    block[k.first] = poses[next++].data();
+  }
   auto *ordering = new ceres::ParameterBlockOrdering; // owned by the solver options
   for (Point &p : m_points) {
     const Eigen::Vector3d ray = m_K.unproject(p.u, p.v, 1.);
     for (const BundlePoint::Observation &o : p.observations) {
       problem.AddResidualBlock(
           new ceres::AutoDiffCostFunction<ReprojectionError, 2, 7, 7, 1>(new ReprojectionError(m_K, ray, o.u, o.v)),
-          &loss, m_keyframes[p.host].x.data(), m_keyframes[o.keyframeId].x.data(), &p.idepth);
+          &loss, block.at(p.host), block.at(o.keyframeId), &p.idepth);
     }
     problem.SetParameterLowerBound(&p.idepth, 0, kMinIdepth);
     ordering->AddElementToGroup(&p.idepth, 0);
   }
-  std::map<int, Pose> backup = m_keyframes;
-  for (auto &k : m_keyframes) {
-    double *x = k.second.x.data();
+  for (const auto &k : m_keyframes) {
+    double *x = block.at(k.first);
     if (!problem.HasParameterBlock(x)) {
       continue;
     }
@@ -213,16 +227,20 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   ceres::Solve(solverOptions, &problem, &summary);
   out.usable = summary.IsSolutionUsable() && summary.termination_type != ceres::USER_FAILURE &&
                !(options.cancel && options.cancel->load());
-  for (const auto &k : m_keyframes) {
-    for (double x : k.second.x) {
-      out.usable = out.usable && std::isfinite(x);
+  for (const std::array<double, 7> &x : poses) {
+    for (double v : x) {
+      out.usable = out.usable && std::isfinite(v);
     }
   }
   for (const Point &p : m_points) {
     out.usable = out.usable && std::isfinite(p.idepth) && p.idepth > 0.;
   }
-  if (!out.usable) { // nothing changes
-    m_keyframes.swap(backup);
+  if (out.usable) {
+    for (auto &k : m_keyframes) {
+      const double *x = block.at(k.first);
+      std::copy(x, x + 7, k.second.x.begin());
+    }
+  } else { // nothing changes
     for (size_t i = 0; i < m_points.size(); ++i) {
       m_points[i].idepth = idepthBackup[i];
     }
