@@ -1,5 +1,5 @@
 // ImagePyramid: level counts (DSO rule, odd sizes), exact gradients and means on known images, intrinsics per
-// level consistent with the 2x2-mean pixel convention, bilinear interpolation, buffer reuse.
+// level consistent with the 2x2-mean pixel convention, bilinear interpolation, buffer reuse, the noise estimate.
 #include "HSlamTestData.h"
 
 #include "features/ImagePyramid.h"
@@ -7,6 +7,7 @@
 #include <visp3/hslam/vpHSlamException.h>
 
 #include <cmath>
+#include <random>
 
 namespace
 {
@@ -163,4 +164,31 @@ TEST(ImagePyramid, RejectsBadInput)
   hslam::ImagePyramid pyr;
   EXPECT_THROW(pyr.build(vpImage<float>(), vgaIntrinsics(), kMaxLevels, kMinCoarsestPixels), vpHSlamException);
   EXPECT_THROW(pyr.build(ramp(16, 16, 1.f, 1.f, 0.f), vgaIntrinsics(), 0, kMinCoarsestPixels), vpHSlamException);
+}
+
+TEST(ImagePyramid, NoiseEstimateRecoversGaussianNoiseAndIgnoresSmoothStructure)
+{
+  // A ramp has no Laplacian: zero noise; Gaussian noise of known sigma added to a smooth shading is recovered
+  // (Immerkaer's estimator is unbiased for white Gaussian noise; 300k pixels make its spread ~0.3 %).
+  const int w = 640, h = 480;
+  hslam::ImagePyramid pyr;
+  pyr.build(ramp(w, h, 0.2f, 0.1f, 50.f), vgaIntrinsics(), kMaxLevels, kMinCoarsestPixels);
+  EXPECT_NEAR(hslam::estimateNoiseSigma(pyr.level(0)), 0., 1e-3);
+  std::mt19937 rng(42);
+  std::normal_distribution<double> noise(0., 1.);
+  for (double sigma : {1., 4.}) {
+    vpImage<float> I(static_cast<unsigned int>(h), static_cast<unsigned int>(w));
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const double shading = 100. + 40. * std::sin(x / 90.) * std::cos(y / 70.);
+        I[y][x] = static_cast<float>(shading + sigma * noise(rng));
+      }
+    }
+    pyr.build(I, vgaIntrinsics(), kMaxLevels, kMinCoarsestPixels);
+    EXPECT_NEAR(hslam::estimateNoiseSigma(pyr.level(0)), sigma, 0.03 * sigma) << "sigma " << sigma;
+  }
+  hslam::PyramidLevel tiny;
+  tiny.width = tiny.height = 2;
+  tiny.color.assign(4, Eigen::Vector3f::Zero());
+  EXPECT_EQ(hslam::estimateNoiseSigma(tiny), 0.);
 }

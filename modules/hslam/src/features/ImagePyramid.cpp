@@ -4,10 +4,12 @@
 // Image pyramid: level 0 copied from the input, coarser levels by 2x2 means, gradients by central differences
 // (DSO FrameHessian::makeImages), level count by DSO's pixel-count rule (see ImagePyramid.h).
 #include "features/ImagePyramid.h"
+
 #include "common/TextParsing.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <cmath>
 #include <sstream>
 
 namespace hslam
@@ -72,6 +74,26 @@ void downsample(const PyramidLevel &fine, PyramidLevel &coarse)
   }
 }
 } // namespace
+
+double estimateNoiseSigma(const PyramidLevel &level)
+{
+  const int w = level.width;
+  const int h = level.height;
+  if (w < 3 || h < 3) {
+    return 0.;
+  }
+  const auto at = [&level, w](int x, int y) { return level.color[static_cast<size_t>(y * w + x)][0]; };
+  double sum = 0.;
+  for (int y = 1; y < h - 1; ++y) {
+    for (int x = 1; x < w - 1; ++x) {
+      const float corners = at(x - 1, y - 1) + at(x + 1, y - 1) + at(x - 1, y + 1) + at(x + 1, y + 1);
+      const float edges = at(x, y - 1) + at(x - 1, y) + at(x + 1, y) + at(x, y + 1);
+      sum += std::fabs(static_cast<double>(corners - 2.f * edges + 4.f * at(x, y)));
+    }
+  }
+  const double kPi = 3.14159265358979323846;
+  return std::sqrt(kPi / 2.) / 6. * sum / (static_cast<double>(w - 2) * static_cast<double>(h - 2));
+}
 
 int ImagePyramid::levelCount(int width, int height, int maxLevels, int minCoarsestPixels)
 {

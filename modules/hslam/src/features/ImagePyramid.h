@@ -81,6 +81,14 @@ struct PyramidLevel {
 };
 
 /*!
+  Standard deviation of the additive noise of an image level, in intensity units (Immerkaer, "Fast noise variance
+  estimation", CVIU 1996): the mean absolute response to the Laplacian difference of two Laplacians
+  [1 -2 1; -2 4 -2; 1 -2 1], which cancels smooth structure, times sqrt(pi / 2) / 6. Texture still adds a little, so
+  on a sharp textured image this over-estimates a clean sensor's noise. 0 for a level smaller than 3x3.
+*/
+VISP_EXPORT double estimateNoiseSigma(const PyramidLevel &level);
+
+/*!
   Pyramid of a rectified frame.
 
   Number of levels (DSO, setGlobalCalib): starting from level 0, a coarser level is added while the current

@@ -77,6 +77,7 @@ struct LocalMapper::Impl {
   int referenceKeyframe = -1;
   std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
   int keyframesInSegment = 0;
+  double initNoiseSigma = 0.; //!< image noise of the segment's first keyframe (estimateNoiseSigma), intensity units
   LoopConsistency loopConsistency;                          //!< candidate groups of the last loop queries
   int keyframeOfLastLoop = 0;                               //!< keyframesInSegment when the last loop was accepted
   std::map<int, std::vector<PairInformation>> pendingPairs; //!< pose-pose links of the keyframes being marginalised
