@@ -98,3 +98,25 @@ TEST(PointDescriptors, NoDescriptorTooCloseToTheBorder)
   EXPECT_EQ(d[0], hslam::OrbDescriptor());
 }
 } // namespace
+
+TEST(PointDescriptors, HammingDistanceCountsEveryDifferingBit)
+{
+  // Against a bit-by-bit count: the inline popcount (baseline x86-64 has no popcnt instruction) must be exact.
+  std::mt19937_64 rng(7);
+  for (int trial = 0; trial < 2000; ++trial) {
+    hslam::OrbDescriptor a, b;
+    for (int w = 0; w < 4; ++w) {
+      a.words[static_cast<size_t>(w)] = rng();
+      // Sparse and dense differences both: every fourth trial differs in all bits of a word.
+      b.words[static_cast<size_t>(w)] = trial % 4 == 0 ? ~a.words[static_cast<size_t>(w)] : rng();
+    }
+    int expected = 0;
+    for (int bit = 0; bit < 256; ++bit) {
+      expected += a.bit(bit) != b.bit(bit) ? 1 : 0;
+    }
+    ASSERT_EQ(hslam::hammingDistance(a, b), expected) << "trial " << trial;
+  }
+  EXPECT_EQ(hslam::popcount64(0), 0);
+  EXPECT_EQ(hslam::popcount64(~0ull), 64);
+  EXPECT_EQ(hslam::popcount64(0x8000000000000001ull), 2);
+}

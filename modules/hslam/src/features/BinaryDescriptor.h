@@ -45,11 +45,27 @@ struct OrbDescriptor {
   bool bit(int b) const { return (words[b >> 6] >> (b & 63)) & 1u; }
 };
 
+/*!
+  Bits set in a word. The baseline x86-64 the build targets has no popcnt instruction, and there
+  __builtin_popcountll is a call into libgcc; the inline bit-sliced count is several times faster (exact either way).
+*/
+inline int popcount64(std::uint64_t x)
+{
+#if defined(__POPCNT__) || !(defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__)))
+  return __builtin_popcountll(x);
+#else
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+  return static_cast<int>((x * 0x0101010101010101ull) >> 56);
+#endif
+}
+
 //! Hamming distance between two descriptors, 0..256.
 inline int hammingDistance(const OrbDescriptor &a, const OrbDescriptor &b)
 {
-  return __builtin_popcountll(a.words[0] ^ b.words[0]) + __builtin_popcountll(a.words[1] ^ b.words[1]) +
-         __builtin_popcountll(a.words[2] ^ b.words[2]) + __builtin_popcountll(a.words[3] ^ b.words[3]);
+  return popcount64(a.words[0] ^ b.words[0]) + popcount64(a.words[1] ^ b.words[1]) +
+         popcount64(a.words[2] ^ b.words[2]) + popcount64(a.words[3] ^ b.words[3]);
 }
 
 //! Descriptor from 32 bytes in OpenCV row order.

