@@ -80,6 +80,21 @@ reuse_columns() { # PREFIX... -> medians of the re-use statistics of the runs
     "$(median "${s[@]}")" "$(median "${c[@]}")"
 }
 
+run_budgets() { # PREFIX SEQUENCE TRACKING MODE -> one run per point budget; sets ates (nan for a failed run), prefixes
+  local base="$1" seq="$2" track="$3" mode="$4" value prefix
+  ates=()
+  prefixes=()
+  for value in $budgets; do
+    prefix="$base.p$value"
+    if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" --set "features.desiredImmatureDensity=$value"; then
+      ates+=("$(ate "$prefix")")
+      prefixes+=("$prefix")
+    else
+      ates+=(nan)
+    fi
+  done
+}
+
 if has_section real; then
   echo "== real sequences: median of ${#budget_list[@]} runs (point budgets $budgets)"
   printf "%-28s %-7s %-9s %9s %8s %7s %7s %7s %7s %5s   %s\n" sequence track map ate map_ms react fused share culled \
@@ -88,18 +103,7 @@ if has_section real; then
     [[ -d "$data/$seq" ]] || { echo "$seq: not found under $data, skipped"; continue; }
     for track in $tracking_modes; do
       for mode in $map_modes; do
-        ates=()
-        prefixes=()
-        for value in $budgets; do
-          prefix="$out/$seq.$track.$mode.p$value"
-          if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" \
-            --set "features.desiredImmatureDensity=$value"; then
-            ates+=("$(ate "$prefix")")
-            prefixes+=("$prefix")
-          else
-            ates+=(nan)
-          fi
-        done
+        run_budgets "$out/$seq.$track.$mode" "$seq" "$track" "$mode"
         [[ ${#prefixes[@]} -gt 0 ]] || continue
         printf "%-28s %-7s %-9s %9.4f %s %5s   %s\n" "$seq" "$track" "$mode" "$(median "${ates[@]}")" \
           "$(reuse_columns "${prefixes[@]}")" "$(sum_json loops_detected "${prefixes[@]}")" "${ates[*]}"
@@ -127,18 +131,7 @@ if has_section loop; then
       max_ver max_corr_ms runs
     for track in $tracking_modes; do
       for mode in $map_modes; do
-        ates=()
-        prefixes=()
-        for value in $budgets; do
-          prefix="$out/outward$loop_laps.$track.$mode.p$value"
-          if run "$prefix" "$seq" --tracking-mode "$track" --mode "$mode" \
-            --set "features.desiredImmatureDensity=$value"; then
-            ates+=("$(ate "$prefix")")
-            prefixes+=("$prefix")
-          else
-            ates+=(nan)
-          fi
-        done
+        run_budgets "$out/outward$loop_laps.$track.$mode" "$seq" "$track" "$mode"
         [[ ${#prefixes[@]} -gt 0 ]] || continue
         maps=()
         tracks=()
