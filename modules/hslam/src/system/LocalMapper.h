@@ -40,6 +40,7 @@
 namespace hslam
 {
 class CoarseTracker;
+struct CoarseTrackerPoint;
 struct ReferenceFeature;
 class OrbVocabulary;
 struct TwoViewInitialization;
@@ -208,6 +209,12 @@ public:
     keyframes, in world coordinates (ReferenceFeature::Xref is the world position), with the ids of those keyframes.
   */
   void localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const;
+  /*!
+    Localisation-only: the stored points of \e keyframeIds (any kind, with or without a descriptor) expressed in a
+    camera at \e refMw, as a direct tracking reference (the inverse depths of a located frame from the map).
+  */
+  void localMapReference(const std::vector<int> &keyframeIds, const SE3d &refMw,
+                         std::vector<CoarseTrackerPoint> &points) const;
   //! Of \e keyframeIds, the stored keyframe whose camera is closest to \e cMw (centre distance; -1 when none).
   int closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const;
 

@@ -8,6 +8,7 @@
 #include "system/LocalMapperImpl.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace hslam
 {
@@ -16,6 +17,8 @@ namespace
 //! Relocalisation matches a lost frame against a candidate keyframe's points and those of the keyframes this many
 //! ids before and after it.
 constexpr int kRelocalizationNeighbours = 2;
+//! DSO makeCoarseDepthL0: a point's weight in a tracking reference is sqrt(1e-3 * H_idepth) (as the window's).
+constexpr double kStoredTrackingWeightScale = 1e-3;
 } // namespace
 
 // Corners only, as for tracking (gradient pixels' descriptors are not where a keypoint would be); measured on
@@ -114,6 +117,32 @@ void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &featur
       f.orb = p.orb;
       f.angleDeg = p.orbAngleDeg;
       features.push_back(f);
+    }
+  }
+}
+
+void LocalMapper::localMapReference(const std::vector<int> &keyframeIds, const SE3d &refMw,
+                                    std::vector<CoarseTrackerPoint> &points) const
+{
+  const Impl &m = *m_impl;
+  points.clear();
+  for (int id : keyframeIds) {
+    const GlobalKeyframe *kf = m_globalMap.find(id);
+    if (!kf) {
+      continue;
+    }
+    const SE3d refMhost = refMw * kf->cMw.inverse();
+    for (const GlobalPoint &p : kf->points) {
+      if (p.state != GlobalPointState::stored || !(p.idepth > 0.f)) {
+        continue;
+      }
+      // The window's tracking weight (DSO: sqrt(1e-3 H_idepth)) from the variance kept at marginalisation.
+      const double weight = std::sqrt(kStoredTrackingWeightScale / std::max(static_cast<double>(p.idepthVar), 1e-12));
+      CoarseTrackerPoint out;
+      if (projectIntoReference(refMhost, m.K0, m.width, m.height, p.u, p.v, p.idepth, static_cast<float>(weight),
+                               out)) {
+        points.push_back(out);
+      }
     }
   }
 }

@@ -97,6 +97,13 @@ public:
 private:
   //! localisation-only: the frame placed in the loaded map by relocalisation against its keyframes (no map change).
   vpHSlam::State localizeInLoadedMap(const FramePtr &frame);
+  /*!
+    Localisation-only: refine \e cMw by the photometric alignment against the last located frame (pose \e wMlast),
+    whose inverse depths come from the stored points, jointly with the reprojection error of \e matches (the
+    indirect step's inliers, world coordinates; null: photometric only). False (cMw unchanged) without a last
+    located frame or when the alignment fails.
+  */
+  bool refineInLoadedMap(const FramePtr &frame, const SE3d &wMlast, const GeometricTerm *matches, SE3d &cMw);
   //! The rectified camera, as map files record it.
   MapCamera mapCamera() const;
   //! Throws when the mode keeps no global map (vo-strict): \e operation names the call in the message.
@@ -172,8 +179,10 @@ private:
   bool m_localizationReady = false; //!< localisation-only: a map is loaded and indexed
   int m_localizedKeyframe = -1;     //!< localisation-only: keyframe that placed the last located frame
   int m_localMapKeyframe = -1;      //!< localisation-only: keyframe m_localMapFeatures were gathered around
-  std::vector<ReferenceFeature> m_localMapFeatures; //!< its stored points and its neighbours', world coordinates
-  std::vector<int> m_localMapKeyframes;             //!< the keyframes they come from
+  std::vector<ReferenceFeature> m_localMapFeatures;     //!< its stored points and its neighbours', world coordinates
+  std::vector<int> m_localMapKeyframes;                 //!< the keyframes they come from
+  FramePtr m_localizedFrame;                            //!< localisation-only: the last located frame (its image)
+  std::unique_ptr<CoarseTracker> m_localizationTracker; //!< localisation-only: joint refinement against it
   bool m_relocalizing = false; //!< tracking failed: lost frames try relocalisation until it works or times out
   double m_lostSince = 0.;     //!< timestamp of the first frame of the current relocalisation attempt, seconds
   bool m_initialized = false;

@@ -40,12 +40,24 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
       m_localMapKeyframe = m_localizedKeyframe;
     }
     IndirectStepResult step;
-    if (m_hybrid->indirectStep(m_localMapFeatures, CoarseTracker::predictConstantVelocity(history), step) &&
+    const SE3d predicted = CoarseTracker::predictConstantVelocity(history);
+    if (m_hybrid->indirectStep(m_localMapFeatures, predicted, step) &&
         step.inliers >= m_params.tracking.relocalizationMinInliers) {
       located = true;
       cMw = step.newMref;
       inliers = step.inliers;
       how = "tracked in the map";
+      if (refineInLoadedMap(frame, wMlast, &step.term, cMw)) {
+        how = "tracked in the map, refined photometrically";
+      }
+    } else {
+      // Too few matches (the map's last keyframes keep few stored points): the photometric alignment against the
+      // last located frame, whose depths are the map's, may still place the frame.
+      cMw = predicted;
+      located = refineInLoadedMap(frame, wMlast, nullptr, cMw);
+      how = "tracked photometrically in the map";
+    }
+    if (located) {
       std::lock_guard<std::mutex> lock(m_mapperMutex);
       const int closest = m_mapper->closestKeyframe(cMw, m_localMapKeyframes);
       m_localizedKeyframe = closest >= 0 ? closest : m_localizedKeyframe;
@@ -91,6 +103,50 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
   m_recorder.addFrame(frame->id, frame->timestamp, -1, cMw.inverse(), m_segment);
   m_prelastFrameId = m_lastFrameId;
   m_lastFrameId = frame->id;
+  m_localizedFrame = frame;
   return vpHSlam::stateTracking;
+}
+
+bool SlamSystem::refineInLoadedMap(const FramePtr &frame, const SE3d &wMlast, const GeometricTerm *matches, SE3d &cMw)
+{
+  // The joint photometric + reprojection optimisation of hybrid tracking, with the last located frame as the
+  // photometric reference: its inverse depths come from the stored points around it, its matches to the map are
+  // the geometric term. The stored keyframes kept no image; the last frame has one.
+  if (!m_localizedFrame || m_localizedFrame->id != m_lastFrameId) {
+    return false;
+  }
+  const SE3d lastMw = wMlast.inverse();
+  std::vector<CoarseTrackerPoint> points;
+  {
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    m_mapper->localMapReference(m_localMapKeyframes, lastMw, points);
+  }
+  if (points.empty()) {
+    return false;
+  }
+  if (!m_localizationTracker) {
+    m_localizationTracker =
+        std::make_unique<CoarseTracker>(m_params.tracker, m_preprocessor.usesPhotometricCalibration());
+  }
+  m_localizationTracker->setReference(*m_localizedFrame, points);
+  GeometricTerm term;
+  if (matches) {
+    term = *matches; // world -> last frame coordinates
+    for (Eigen::Vector3d &X : term.Xref) {
+      X = lastMw * X;
+    }
+    m_localizationTracker->setGeometricTerm(&term);
+  }
+  SE3d newMlast = cMw * wMlast;
+  AffineBrightness affine = m_localizedFrame->affine;
+  CoarseTrackingResult result;
+  const bool ok = m_localizationTracker->track(*frame, newMlast, affine, result);
+  m_localizationTracker->setGeometricTerm(nullptr);
+  if (!ok) {
+    return false;
+  }
+  cMw = newMlast * lastMw;
+  frame->affine = affine;
+  return true;
 }
 } // namespace hslam
