@@ -2,6 +2,7 @@
  * H-SLAM for ViSP.
  */
 #include "loop/GlobalBundleAdjustment.h"
+#include "loop/Sim3Parameters.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
@@ -211,6 +212,7 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   ceres::Solver::Options solverOptions;
   solverOptions.max_num_iterations = options.maxIterations;
   solverOptions.linear_solver_type = ceres::SPARSE_SCHUR;
+  solverOptions.sparse_linear_algebra_library_type = kLoopSparseLibrary;
   solverOptions.linear_solver_ordering.reset(ordering);
   solverOptions.num_threads = std::max(1, options.threads);
   solverOptions.logging_type = ceres::SILENT;
