@@ -329,6 +329,7 @@ OptimizationSummary WindowOptimizer::optimize(int maxIterations)
     }
   }
   summary.finalEnergy = energy;
+  summary.finalPhotometricEnergy = m_acc.energy; // m_acc is the linearisation at the final state
   summary.finalLambda = lambda;
   summary.inlierResiduals = m_acc.inliers;
   finalizeOutliers(summary);

@@ -61,9 +61,11 @@ namespace hslam
 struct OptimizationSummary {
   int iterations = 0; //!< LM iterations run (accepted + rejected steps)
   int acceptedSteps = 0;
-  bool converged = false;               //!< stopped because the step became small
-  double initialEnergy = 0.;            //!< total energy (photometric + priors) before
-  double finalEnergy = 0.;              //!< total energy after
+  bool converged = false;    //!< stopped because the step became small
+  double initialEnergy = 0.; //!< total energy (photometric + priors) before
+  double finalEnergy = 0.;   //!< total energy after
+  //! Photometric part of finalEnergy (the marginalisation prior's energy is relative: it can be negative).
+  double finalPhotometricEnergy = 0.;
   std::vector<double> acceptedEnergies; //!< energy after each accepted step (strictly decreasing)
   double finalLambda = 0.;
   int activePoints = 0;       //!< points optimised
@@ -231,8 +233,8 @@ private:
 
   WindowContext m_ctx;
   WindowAccumulator m_acc;
-  bool m_accCurrent = false; //!< m_acc is the linearisation at the current states of the current window
-  std::unique_ptr<WorkerPool> m_pool;         //!< system.workerThreads threads (+ the caller)
+  bool m_accCurrent = false;          //!< m_acc is the linearisation at the current states of the current window
+  std::unique_ptr<WorkerPool> m_pool; //!< system.workerThreads threads (+ the caller)
   std::vector<WindowAccumulator> m_workerAcc; //!< one per pool participant, merged in participant order
   std::vector<double> m_workerEnergy;         //!< energyAll(): one partial sum per participant
   Eigen::MatrixXd m_H, m_Hred;

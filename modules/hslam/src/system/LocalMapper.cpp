@@ -285,7 +285,7 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf)
   const OptimizationSummary summary = m.optimizer.optimize(m.params.mapper.maxOptimizationIterations);
   const double rmse =
       summary.inlierResiduals > 0
-          ? std::sqrt(summary.finalEnergy / (static_cast<double>(summary.inlierResiduals) * kPatternSize))
+          ? std::sqrt(summary.finalPhotometricEnergy / (static_cast<double>(summary.inlierResiduals) * kPatternSize))
           : 0.;
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << kf->id() << ": " << summary.activePoints << " points, "
                                               << summary.iterations << " LM iterations, rmse " << rmse << ", "
