@@ -69,10 +69,7 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
       EXPECT_GT(s.loopVerificationMsMax, 0.);
       EXPECT_GE(s.loopCorrectionMsMax, s.lastLoopCorrectionMs);
       EXPECT_GT(s.lastLoopCorrectionMs, 0.);
-      // The global bundle adjustment followed the correction and lowered the reprojection error.
-      EXPECT_EQ(s.globalBundleAdjustments, s.loopsCorrected);
-      EXPECT_GE(s.globalBundleAdjustmentsApplied, 1u);
-      EXPECT_LT(s.globalBundleAdjustmentRmsAfterPx, s.globalBundleAdjustmentRmsBeforePx);
+      EXPECT_EQ(s.globalBundleAdjustments, 0u); // off by default (README, "Global map and loop closure")
       // No frame far off: the frames before the initialisation, tracked backwards while the camera turned away
       // from the map, stop where the map leaves the view (they went 0.4 m wrong, 40x the run's RMSE, before that
       // check). Relative to the run's RMSE: since the initialisation's check allows for image noise the run
@@ -89,11 +86,26 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
               << " m; vo-strict tracked " << strict.statistics.trackedFrames << ", " << strict.statistics.segments
               << " segment(s), ATE " << strictAte.back() << " m" << std::endl;
   }
+  {
+    // With loop.globalBundleAdjustment on, the global bundle adjustment follows every correction, in order, and
+    // lowers the reprojection error.
+    vpHSlamParameters params = fastPreset(vpHSlamParameters::modeSlam);
+    params.loop.globalBundleAdjustment = true;
+    const hslam_test::SystemRun run = hslam_test::runSource(dir, 0, params);
+    const vpHSlam::Statistics &s = run.statistics;
+    EXPECT_GE(s.loopsCorrected, 1u);
+    EXPECT_EQ(s.globalBundleAdjustments, s.loopsCorrected);
+    EXPECT_EQ(s.globalBundleAdjustmentsApplied, s.globalBundleAdjustments);
+    EXPECT_LT(s.globalBundleAdjustmentRmsAfterPx, s.globalBundleAdjustmentRmsBeforePx);
+    std::cout << "outward loop with the global bundle adjustment: " << s.globalBundleAdjustments << " run, RMS "
+              << s.globalBundleAdjustmentRmsBeforePx << " -> " << s.globalBundleAdjustmentRmsAfterPx << " px, ATE "
+              << hslam_test::simAte(gt, run.trajectory) << " m" << std::endl;
+  }
   std::sort(slamAte.begin(), slamAte.end());
   std::sort(strictAte.begin(), strictAte.end());
   EXPECT_GE(runsWithLoop, 2);
-  // Issue 10's bar: slam at least 3x better than vo-strict (medians; 4.2x measured on these three runs, which
-  // track all 801 frames: 0.017 / 0.038 / 0.067 m against 0.080 / 0.162 / 0.484 m).
+  // Issue 10's bar: slam at least 3x better than vo-strict (medians; 3.8x measured on these three runs, which
+  // track all 801 frames: 0.020 / 0.043 / 0.088 m against 0.080 / 0.162 / 0.484 m).
   EXPECT_LT(3. * slamAte[1], strictAte[1]);
   EXPECT_LT(slamAte[1], 0.05);
 }
@@ -133,6 +145,7 @@ TEST(SystemLoop, RealTimeLoopCorrectionRunsBesideTracking)
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
   vpHSlamParameters params = fastPreset(vpHSlamParameters::modeSlam);
   params.system.deterministic = false;
+  params.loop.globalBundleAdjustment = true; // off by default; on here so its thread runs (and is checked)
   params.features.desiredImmatureDensity = 490;
   vpHSlam slam(*source, params);
   vpImage<unsigned char> I;

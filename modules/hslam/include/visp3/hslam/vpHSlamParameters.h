@@ -184,10 +184,13 @@ public:
     int minInliers = 20;                   //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
     double ransacThresholdPx = 3.035;      //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
     double maxRotationCorrectionDeg = 30.; //!< a loop rotating the map more than this is refused (aliasing)
-    bool globalBundleAdjustment = true;    //!< after a loop's pose graph, refine stored poses and depths (background)
-    int globalBaIterations = 10;           //!< Levenberg-Marquardt iterations of the global bundle adjustment
-    double globalBaHuberPx = 2.;           //!< Huber threshold of its reprojection errors, pixels
-    int globalBaPointsPerKeyframe = 100;   //!< points of each stored keyframe it adjusts (most observed; 0 = all)
+    //! After a loop's pose graph, refine stored poses and depths (background). Off by default: its measurements are
+    //! the window's own projections at marginalisation, so it adds little the pose graph has not used and partly
+    //! undoes the correction (measured: README, "Global map and loop closure").
+    bool globalBundleAdjustment = false;
+    int globalBaIterations = 10;         //!< Levenberg-Marquardt iterations of the global bundle adjustment
+    double globalBaHuberPx = 2.;         //!< Huber threshold of its reprojection errors, pixels
+    int globalBaPointsPerKeyframe = 100; //!< points of each stored keyframe it adjusts (most observed; 0 = all)
   };
 
   //! System-wide behaviour.
