@@ -516,6 +516,9 @@ void SlamSystem::declareLost(bool discardSegment)
   synchronize();
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+    // A global bundle adjustment still running on the closing segment is waited for and written back (its keyframes
+    // stay in the global map): a new segment would otherwise drop what it computed.
+    m_mapper->collectGlobalBundleAdjustment(true);
     std::vector<LocalMapper::KeyframeState> states;
     m_mapper->takeKeyframeStates(states);
     for (const LocalMapper::KeyframeState &k : states) {
