@@ -307,19 +307,23 @@ OptimizationSummary WindowOptimizer::optimize(int maxIterations)
     backupStates();
     applyStep(dx, lambda);
     prepareContext();
-    const double newEnergy = energyAll(m_allPoints) + priorEnergy();
+    // The step is judged by the energy of the linearisation at the new state (the same sums, in the same order, as
+    // energyAll()): most steps are accepted, and the linearisation is then the next iteration's (DSO does the
+    // same). A rejected step pays one linearisation more, at the restored state.
+    linearizeAll(m_allPoints, m_acc);
+    const double newEnergy = m_acc.energy + priorEnergy();
     if (newEnergy < energy) {
       energy = newEnergy;
       summary.acceptedEnergies.push_back(energy);
       ++summary.acceptedSteps;
       lambda *= kLambdaAcceptFactor;
-      linearizeAll(m_allPoints, m_acc);
       assembleFullSystem(m_acc, m_H, m_b);
       addPriors(m_H, m_b);
       summary.converged = norm < m_mapper.stepConvergenceThreshold;
     } else {
       restoreStates();
       prepareContext();
+      linearizeAll(m_allPoints, m_acc);
       lambda *= kLambdaRejectFactor;
       // A rejected step that small is numerical noise around the minimum.
       summary.converged = norm < m_mapper.stepConvergenceThreshold;
