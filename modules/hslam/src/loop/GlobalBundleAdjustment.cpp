@@ -2,7 +2,7 @@
  * H-SLAM for ViSP.
  */
 #include "loop/GlobalBundleAdjustment.h"
-#include "loop/Sim3Parameters.h"
+#include "loop/LoopSolverOptions.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
@@ -209,13 +209,9 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
     }
     ordering->AddElementToGroup(x, 1);
   }
-  ceres::Solver::Options solverOptions;
-  solverOptions.max_num_iterations = options.maxIterations;
-  solverOptions.linear_solver_type = ceres::SPARSE_SCHUR;
-  solverOptions.sparse_linear_algebra_library_type = kLoopSparseLibrary;
+  ceres::Solver::Options solverOptions = loopSolverOptions(options.maxIterations, ceres::SPARSE_SCHUR);
   solverOptions.linear_solver_ordering.reset(ordering);
   solverOptions.num_threads = std::max(1, options.threads);
-  solverOptions.logging_type = ceres::SILENT;
   std::unique_ptr<CancelCallback> callback;
   if (options.cancel) {
     callback = std::make_unique<CancelCallback>(*options.cancel);

@@ -3,6 +3,7 @@
  */
 #include "loop/PoseGraph.h"
 
+#include "loop/LoopSolverOptions.h"
 #include "loop/Sim3Parameters.h"
 
 #include <visp3/hslam/vpHSlamException.h>

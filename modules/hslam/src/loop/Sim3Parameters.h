@@ -15,7 +15,6 @@
 #include "math/Sim3.h"
 
 #include <ceres/autodiff_manifold.h>
-#include <ceres/solver.h>
 
 #include <array>
 #include <cmath>
@@ -24,25 +23,6 @@ namespace hslam
 {
 constexpr int kSim3ParameterSize = 8;
 constexpr int kSim3TangentSize = 7;
-
-/*!
-  Sparse Cholesky back-end of every loop-closure problem: Eigen's. SuiteSparse's CHOLMOD, Ceres' default, runs its
-  supernodal factorisation on an OpenMP pool whatever Ceres' num_threads says, so a correction would take cores from
-  tracking, and its pool is invisible to ThreadSanitizer; the problems here (a few hundred keyframes) are small.
-*/
-constexpr ceres::SparseLinearAlgebraLibraryType kLoopSparseLibrary = ceres::EIGEN_SPARSE;
-
-//! Solver settings every loop-closure problem uses: one thread (the mapping thread's core), no output.
-inline ceres::Solver::Options loopSolverOptions(int maxIterations, ceres::LinearSolverType linearSolver)
-{
-  ceres::Solver::Options options;
-  options.max_num_iterations = maxIterations;
-  options.linear_solver_type = linearSolver;
-  options.sparse_linear_algebra_library_type = kLoopSparseLibrary;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  return options;
-}
 
 template <typename T> Sim3<T> sim3FromParameters(const T *x)
 {

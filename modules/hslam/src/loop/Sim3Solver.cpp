@@ -3,6 +3,7 @@
  */
 #include "loop/Sim3Solver.h"
 
+#include "loop/LoopSolverOptions.h"
 #include "loop/Sim3Parameters.h"
 
 #include <visp3/hslam/vpHSlamException.h>
