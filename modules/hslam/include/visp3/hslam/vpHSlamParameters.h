@@ -150,6 +150,8 @@ public:
     double relocalizationTimeout = 1.; //!< seconds of frames with features not relocalised before a new segment
     int relocalizationCandidates = 5;  //!< keyframes tried per lost frame, best BoW score first
     int relocalizationMinInliers = 30; //!< PnP inliers after refinement to accept a relocalisation
+    int relocalizationCheckInliers = 15; //!< ORB inliers of the joint alignment that confirm a relocalised pose (wrong
+                                         //!< alignments measured with 0-3, right ones with 16-58)
   };
 
   /*!
