@@ -147,9 +147,9 @@ public:
     int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
     bool relocalize = true; //!< when tracking fails, relocalise in the same map before a new segment (hybrid or
                             //!< indirect tracking, or any tracking in slam mode: it needs the keyframe database)
-    double relocalizationTimeout = 1.; //!< seconds of frames with features not relocalised before a new segment
-    int relocalizationCandidates = 5;  //!< keyframes tried per lost frame, best BoW score first
-    int relocalizationMinInliers = 30; //!< PnP inliers after refinement to accept a relocalisation
+    double relocalizationTimeout = 1.;   //!< seconds of frames with features not relocalised before a new segment
+    int relocalizationCandidates = 5;    //!< keyframes tried per lost frame, best BoW score first
+    int relocalizationMinInliers = 30;   //!< PnP inliers after refinement to accept a relocalisation
     int relocalizationCheckInliers = 15; //!< ORB inliers of the joint alignment that confirm a relocalised pose (wrong
                                          //!< alignments measured with 0-3, right ones with 16-58)
   };
