@@ -518,8 +518,13 @@ void SlamSystem::declareLost(bool discardSegment)
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     // A global bundle adjustment still running on the closing segment is waited for and written back (its keyframes
-    // stay in the global map): a new segment would otherwise drop what it computed.
-    m_mapper->collectGlobalBundleAdjustment(true);
+    // stay in the global map): a new segment would otherwise drop what it computed. The statistics snapshot is
+    // refreshed here: the new segment may publish no keyframe before the run ends (the real-time loop test under
+    // ThreadSanitizer once ended with three adjustments started, the last written back here, and none reported).
+    if (m_mapper->collectGlobalBundleAdjustment(true)) {
+      std::lock_guard<std::mutex> lock(m_snapshotMutex);
+      m_snapshotLoopStats = m_mapper->loopStatistics();
+    }
     std::vector<LocalMapper::KeyframeState> states;
     m_mapper->takeKeyframeStates(states);
     for (const LocalMapper::KeyframeState &k : states) {
