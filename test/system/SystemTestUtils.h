@@ -14,6 +14,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 #include <unistd.h>
@@ -105,7 +106,9 @@ inline SystemRun runSynthetic(const vpHSlamSyntheticScene &scene, unsigned int c
 }
 
 //! Feed a shared sequence (at most maxFrames) to a new system.
-inline SystemRun runSource(const std::string &path, unsigned int maxFrames, const vpHSlamParameters &params)
+inline SystemRun
+runSource(const std::string &path, unsigned int maxFrames, const vpHSlamParameters &params,
+          const std::function<void(const vpHSlamImageSource::Frame &, vpImage<unsigned char> &)> &alter = nullptr)
 {
   vpHSlamImageSource::Options options;
   options.maxFrames = maxFrames;
@@ -115,6 +118,9 @@ inline SystemRun runSource(const std::string &path, unsigned int maxFrames, cons
   vpImage<unsigned char> I;
   vpHSlamImageSource::Frame frame;
   while (source->acquire(I, frame)) {
+    if (alter) {
+      alter(frame, I); // e.g. a covered lens: the frame replaced by a black image
+    }
     run.states.push_back(slam.track(I, frame.timestamp, frame.exposure));
   }
   slam.synchronize();

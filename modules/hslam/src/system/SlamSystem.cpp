@@ -349,11 +349,11 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   CoarseTrackingResult result;
   const bool success = estimatePose(frame, history, newMref, affine, result);
   if (m_relocalizing) {
-    // Accepted only when the map's corners confirm it too (tracking.relocalizationCheckInliers, 1.5x the inliers a
-    // tracked frame needs): a lost camera pointed at something new can be aligned photometrically to a wrong place
-    // (measured on 7-Scenes after covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with
-    // a gain change of e^-1.4). Right relocalisations after a 5-frame cover had 16-58 inliers; the former 20 (twice
-    // a tracked frame's) refused four of five of them in slam mode with direct tracking (point budgets 480-520).
+    // Accepted only when the map's corners confirm it too (tracking.relocalizationCheckInliers, 15 by default): a lost
+    // camera pointed at something new can be aligned photometrically to a wrong place (measured on 7-Scenes after
+    // covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with a gain change of e^-1.4).
+    // Right relocalisations after a 5-frame cover had 16-58 inliers; the former 20 (twice a tracked frame's) refused
+    // four of five of them in slam mode with direct tracking (point budgets 480-520).
     VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation check: alignment "
                                              << (success ? "ok" : coarseTrackingStatusName(result.status)) << ", "
                                              << m_indirect.matches << " ORB matches, " << m_indirect.inliers
