@@ -61,6 +61,26 @@ inline float huberEnergy(float residual, float threshold, float &weight)
   return weight * residual * residual * (2.f - weight);
 }
 
+//! Slack of patternSegmentInside() for the rounding of accumulated positions, pixels.
+constexpr float kSegmentInsideSlack = 0.5f;
+
+//! True when the pattern at every position of the segment (x0, y0)-(x1, y1) is inside \e level for bilinear
+//! interpolation (PyramidLevel::isInside with margin 0), with kSegmentInsideSlack to spare.
+bool patternSegmentInside(const PyramidLevel &level, const std::array<Eigen::Vector2f, kPatternSize> &offsets, float x0,
+                          float y0, float x1, float y1)
+{
+  Eigen::Vector2f lo = offsets[0], hi = offsets[0];
+  for (const Eigen::Vector2f &o : offsets) {
+    lo = lo.cwiseMin(o);
+    hi = hi.cwiseMax(o);
+  }
+  const float xLo = std::min(x0, x1) + lo.x(), xHi = std::max(x0, x1) + hi.x();
+  const float yLo = std::min(y0, y1) + lo.y(), yHi = std::max(y0, y1) + hi.y();
+  return xLo >= kSegmentInsideSlack && yLo >= kSegmentInsideSlack &&
+         xHi < static_cast<float>(level.width) - 1.f - kSegmentInsideSlack &&
+         yHi < static_cast<float>(level.height) - 1.f - kSegmentInsideSlack;
+}
+
 //! Inverse depth that projects to target coordinate \e x along one image axis: x = (pr_a + Kt_a id) / (pr_z + Kt_z id).
 inline float idepthFromCoordinate(float x, float prAxis, float prZ, float KtAxis, float KtZ)
 {
@@ -332,6 +352,12 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
   }
   const std::array<Eigen::Vector2f, kPatternSize> &offsets = context.rotatedPattern;
 
+  // Most segments lie well inside the image: one box test for the whole segment then spares the per-pixel test
+  // (same sums in the same order either way). The positions are accumulated step by step, so the test keeps a
+  // slack for their rounding.
+  const bool segmentInside =
+      numSteps > 0 && patternSegmentInside(target, offsets, ptx, pty, ptx + static_cast<float>(numSteps - 1) * stepU,
+                                           pty + static_cast<float>(numSteps - 1) * stepV);
   std::array<float, kMaxTraceSteps> errors;
   float bestU = 0.f, bestV = 0.f, bestEnergy = kNoEnergy;
   int bestIndex = -1;
@@ -340,7 +366,7 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
     for (int k = 0; k < kPatternSize; ++k) {
       const float x = ptx + offsets[static_cast<size_t>(k)].x();
       const float y = pty + offsets[static_cast<size_t>(k)].y();
-      if (!target.isInside(x, y, 0.f)) {
+      if (!segmentInside && !target.isInside(x, y, 0.f)) {
         energy += kOutOfImageEnergy;
         continue;
       }
