@@ -243,8 +243,8 @@ TEST(Parameters, DefaultsAreValid)
 {
   const vpHSlamParameters params;
   EXPECT_NO_THROW(params.validate());
-  EXPECT_EQ(params.mapper.windowSize, 7);
-  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeVoStrict);
+  EXPECT_EQ(params.mapper.windowSize, 6);
+  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeSlam);
 }
 
 TEST(Parameters, SaveHasExactlyTheHeaderFields)
@@ -283,12 +283,12 @@ TEST(Parameters, RoundTripChangesEveryField)
     EXPECT_EQ(reloaded.at(name), perturbed.at(name)) << name << " did not survive load() then save()";
   }
   // The YAML keys reach the C++ members, one per value type.
-  EXPECT_EQ(params.mapper.windowSize, 8);
+  EXPECT_EQ(params.mapper.windowSize, 7);
   EXPECT_DOUBLE_EQ(params.tracker.huberThreshold, 9. * 0.9);
   EXPECT_EQ(params.tracker.iterationsPerLevel, (std::vector<int>{11, 21, 51, 51, 51, 1}));
   EXPECT_TRUE(params.system.deterministic);
   EXPECT_FALSE(params.system.usePhotometricCalibration);
-  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeVoReuse);
+  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeVoStrict);
   EXPECT_DOUBLE_EQ(params.tracker.affinePriorA, 0.5);
   EXPECT_DOUBLE_EQ(params.initializer.ransacConfidence, 0.999 * 0.9);
 }
@@ -298,12 +298,12 @@ TEST(Parameters, PartialFileKeepsDefaults)
   const std::string path = tempPath("partial.yaml");
   // An integer for a real and 1 for a bool are accepted (cv::FileStorage writes a C++ bool as 1).
   writeText(path, "%YAML:1.0\n---\nmapper:\n  windowSize: 9\ntracker:\n  huberThreshold: 7\n"
-                  "system:\n  mode: slam\n  deterministic: 1\n# a comment\n");
+                  "system:\n  mode: vo-reuse\n  deterministic: 1\n# a comment\n");
   vpHSlamParameters params;
   params.load(path);
   EXPECT_EQ(params.mapper.windowSize, 9);
   EXPECT_DOUBLE_EQ(params.tracker.huberThreshold, 7.);
-  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeSlam);
+  EXPECT_EQ(params.system.mode, vpHSlamParameters::modeVoReuse);
   EXPECT_TRUE(params.system.deterministic);
 
   std::map<std::string, std::string> loaded = FlattenParams(params, "loaded");

@@ -303,6 +303,8 @@ TEST(WindowOptimizer, PairInformationLinksKeyframesSharingResiduals)
 TEST(WindowOptimizer, MarginalizationDecision)
 {
   Window w(8, 40);
+  w.scene.params.mapper.windowSize = 7; // the paper's window, pinned: the default is 6 (README, "Modes")
+  w.scene.params.mapper.minWindowSize = 5;
   WindowOptimizer opt(w.scene.params);
   w.addAll(opt);
   // Full window (8 > windowSize 7): exactly one keyframe by the distance score, never keyframe 0 nor the two newest.

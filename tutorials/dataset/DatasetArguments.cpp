@@ -125,10 +125,10 @@ void printUsage(const char *program, std::ostream &out)
          "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
          "                     and timestamp: a covered lens (default: none)\n"
          "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        vo-strict (window only, DSO-like; default), vo-reuse (marginalised points kept\n"
-         "                     as a global map and re-used in the window) or slam (vo-reuse plus loop detection,\n"
-         "                     Sim(3) verification, pose-graph correction of the marginalised keyframes, then\n"
-         "                     a global inverse-depth bundle adjustment, in the background in real time)\n"
+         "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
+         "                     pose-graph correction of the marginalised keyframes, relocalisation), vo-reuse\n"
+         "                     (the same without loop closure) or vo-strict (window only, DSO-like);\n"
+         "                     default: system.mode of --config, else slam\n"
          "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
          "                     default: tracking.mode of --config, else direct\n"
          "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
@@ -136,7 +136,7 @@ void printUsage(const char *program, std::ostream &out)
          "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
          "                     would (default 1; 0 = as fast as possible). Ignored with --deterministic\n"
          "  --config FILE      settings (YAML, see vpHSlamParameters); command-line options override it;\n"
-         "                     data/hslam-fast.yaml is a real-time preset (DSO defaults otherwise)\n"
+         "                     data/hslam-dso.yaml has DSO's settings (3x the points, slower)\n"
          "  --set S.K=V        one setting (section.key=value, as in the YAML file), after --config; repeatable,\n"
          "                     e.g. --set features.desiredImmatureDensity=490 --set tracking.relocalize=false\n"
          "  --save-config FILE write the settings in use (YAML)\n"
@@ -294,8 +294,9 @@ vpHSlamParameters makeParameters(const Arguments &args)
     std::error_code ignored;
     std::filesystem::remove(file, ignored);
   }
-  const vpHSlamParameters::Mode mode = vpHSlamParameters::parseMode(args.mode);
-  params.system.mode = mode;
+  if (!args.mode.empty()) {
+    params.system.mode = vpHSlamParameters::parseMode(args.mode);
+  }
   if (!args.trackingMode.empty()) {
     params.tracking.mode = vpHSlamParameters::parseTrackingMode(args.trackingMode);
   }

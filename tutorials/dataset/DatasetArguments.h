@@ -29,7 +29,7 @@ struct FrameInterval {
 struct Arguments {
   std::string input;
   vpHSlamImageSource::Options options;
-  std::string mode = "vo-strict";
+  std::string mode;                  //!< vo-strict, vo-reuse or slam; empty: as --config (or the default, slam) says
   std::string trackingMode;          //!< direct, indirect or hybrid; empty: as --config (or the default) says
   std::vector<std::string> settings; //!< --set SECTION.KEY=VALUE, in order (applied after --config)
   bool deterministic = false;

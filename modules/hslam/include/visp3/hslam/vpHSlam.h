@@ -69,8 +69,9 @@ class SlamSystem;
   are thread-safe snapshots and may be called from any thread, e.g. a viewer. The object owns its mapping thread;
   the destructor stops it once the frames still queued for mapping (a few at most) are processed.
 
-  Settings: vpHSlamParameters defaults are DSO's. data/hslam-fast.yaml is a real-time preset (fewer points and
-  keyframes, a 6-keyframe window) that runs the shared 640x480 sequences at 2.9x to 6x real time on one core.
+  Settings: the vpHSlamParameters defaults run the whole SLAM system (mode slam: global map, loop closure,
+  relocalisation) with fewer points and keyframes than DSO and a 6-keyframe window, about 3x to 6x real time on one
+  core on the shared 640x480 sequences (README, "Defaults"); data/hslam-dso.yaml has DSO's settings.
 
   \code
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create("../shared/data/tsukuba_cg_000-149");

@@ -19,7 +19,8 @@
   \ingroup group_hslam
   \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, globalMap,
   system), each field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part)
-  unless noted.
+  unless noted. The defaults run the whole system (mode slam) with fewer points, iterations and keyframes than DSO,
+  the trade-off measured in README, "Defaults"; data/hslam-dso.yaml restores DSO's values.
 
   What it is for: no threshold lives in algorithm code; everything a user may tune is here, can be written to and
   read from YAML (cv::FileStorage format, one section per component), and printed. Fields absent from a YAML file
@@ -58,10 +59,10 @@ public:
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
   struct Features {
-    int desiredPointDensity = 2000;    //!< target number of active points in the window (DSO)
-    int desiredImmatureDensity = 1500; //!< candidates selected per new keyframe (DSO)
-    int selectionBlockSize = 32;       //!< side of the blocks of the region-adaptive gradient threshold, pixels
-    double gradientThresholdAdd = 7.;  //!< threshold = block median of |grad| + this, intensity units (DSO)
+    int desiredPointDensity = 600;    //!< target number of active points in the window (DSO 2000; README, "Defaults")
+    int desiredImmatureDensity = 500; //!< candidates selected per new keyframe (DSO 1500; README, "Defaults")
+    int selectionBlockSize = 32;      //!< side of the blocks of the region-adaptive gradient threshold, pixels
+    double gradientThresholdAdd = 7.; //!< threshold = block median of |grad| + this, intensity units (DSO)
     double gradientThresholdLevelFactor = 0.75; //!< threshold multiplier per coarser selection level (DSO)
     int selectionLevels = 3;                    //!< pyramid levels used for selection (DSO: 3 "potential" sizes)
     int fastThreshold = 7;                      //!< FAST intensity threshold (ARCHITECTURE.md)
@@ -83,10 +84,10 @@ public:
     double affinePriorB = 0.;             //!< prior weight on b (0 = free)
     double affinePriorACalibrated = 1e12; //!< prior weight on a with photometric calibration (DSO: fixed)
     double affinePriorBCalibrated = 1e8;  //!< prior weight on b with photometric calibration (DSO)
-    double maxShiftWeightT = 0.04;        //!< keyframe decision: translation flow weight, per (w+h) (DSO)
+    double maxShiftWeightT = 0.02;        //!< keyframe decision: translation flow weight, per (w+h) (DSO 0.04)
     double maxShiftWeightR = 0.0;         //!< keyframe decision: rotation flow weight, per (w+h) (DSO)
-    double maxShiftWeightRT = 0.02;       //!< keyframe decision: rotation+translation flow weight, per (w+h) (DSO)
-    double maxAffineWeight = 2.;          //!< keyframe decision: brightness change weight (DSO)
+    double maxShiftWeightRT = 0.01;       //!< keyframe decision: rotation+translation flow weight, per (w+h) (DSO 0.02)
+    double maxAffineWeight = 1.;          //!< keyframe decision: brightness change weight (DSO 2)
     double keyframeResidualFactor = 2.;   //!< keyframe when the RMSE exceeds this times the keyframe's first RMSE
     int maxFramesBetweenKeyframes = 0;    //!< force a keyframe after this many frames (0 = never)
     double coarseCutoffResidual = 20.;    //!< coarse tracking: single-pixel residuals above this are saturated (DSO 20)
@@ -94,9 +95,9 @@ public:
 
   //! Sliding-window photometric bundle adjustment, point management and marginalisation.
   struct Mapper {
-    int windowSize = 7;                       //!< keyframes in the window (paper: 7)
-    int minWindowSize = 5;                    //!< marginalisation keeps at least this many keyframes (DSO)
-    int maxOptimizationIterations = 6;        //!< LM iterations per new keyframe (DSO)
+    int windowSize = 6;                       //!< keyframes in the window (paper and DSO: 7)
+    int minWindowSize = 4;                    //!< marginalisation keeps at least this many keyframes (DSO 5)
+    int maxOptimizationIterations = 3;        //!< LM iterations per new keyframe (DSO 6)
     int minOptimizationIterations = 1;        //!< (DSO)
     double initialLambda = 1e-5;              //!< LM damping start (DSO)
     double stepConvergenceThreshold = 1e-5;   //!< stop when the scaled update norm is below this
@@ -197,7 +198,7 @@ public:
 
   //! System-wide behaviour.
   struct System {
-    Mode mode = modeVoStrict;              //!< see Mode (vo-strict until slam is measured better everywhere)
+    Mode mode = modeSlam;                  //!< see Mode (README, "Defaults": why slam)
     bool deterministic = false;            //!< map in the caller's thread: identical output run to run
     int workerThreads = 0;                 //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
