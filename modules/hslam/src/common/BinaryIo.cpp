@@ -41,16 +41,6 @@ void ByteWriter::f64(double v)
   u64(bits);
 }
 
-std::uint32_t loadU32(const std::uint8_t *p)
-{
-  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
-}
-
-std::uint64_t loadU64(const std::uint8_t *p)
-{
-  return std::uint64_t(loadU32(p)) | (std::uint64_t(loadU32(p + 4)) << 32);
-}
-
 const unsigned char *ByteReader::take(std::size_t size, const char *what)
 {
   if (size > remaining()) {

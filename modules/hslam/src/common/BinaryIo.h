@@ -17,6 +17,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <string>
 
 namespace hslam
@@ -71,9 +72,29 @@ private:
   std::size_t m_offset = 0;
 };
 
-//! Little-endian words of a byte buffer (no bounds check: the caller has checked the size).
-VISP_EXPORT std::uint32_t loadU32(const std::uint8_t *p);
-VISP_EXPORT std::uint64_t loadU64(const std::uint8_t *p);
+//! Little-endian words of a byte buffer (no bounds check: the caller has checked the size). Inline, one load on a
+//! little-endian host: the vocabulary reader calls them for every record, and the byte-by-byte assembly (which GCC
+//! does not fuse into one load) made hashing the shipped vocabulary about 40 % slower.
+inline std::uint32_t loadU32(const std::uint8_t *p)
+{
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::uint32_t word;
+  std::memcpy(&word, p, sizeof(word));
+  return word;
+#else
+  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
+#endif
+}
+inline std::uint64_t loadU64(const std::uint8_t *p)
+{
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::uint64_t word;
+  std::memcpy(&word, p, sizeof(word));
+  return word;
+#else
+  return std::uint64_t(loadU32(p)) | (std::uint64_t(loadU32(p + 4)) << 32);
+#endif
+}
 
 /*!
   The whole file as bytes. Errors: fileNotFound, fileUnreadable (a folder, unreadable), parseError (empty file);

@@ -14,7 +14,7 @@
 namespace hslam
 {
 KeyframeDatabase::KeyframeDatabase(std::size_t wordCount, const KeyframeDatabaseOptions &options)
-    : m_options(options), m_index(wordCount)
+    : m_options(options), m_wordCount(wordCount)
 {
   if (!(options.minCommonWordsRatio >= 0.0 && options.minCommonWordsRatio <= 1.0) ||
       !(options.groupRetainRatio >= 0.0 && options.groupRetainRatio <= 1.0) || options.groupNeighbours < 0) {
@@ -31,10 +31,10 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
                            "keyframe database: keyframe " + std::to_string(id) + " is already present");
   }
   for (const BowEntry &e : bow) {
-    if (e.wordId >= m_index.size()) {
+    if (e.wordId >= m_wordCount) {
       throw vpHSlamException(vpHSlamException::invalidArgument,
                              "keyframe database: word " + std::to_string(e.wordId) + " of keyframe " +
-                                 std::to_string(id) + " is outside the vocabulary (" + std::to_string(m_index.size()) +
+                                 std::to_string(id) + " is outside the vocabulary (" + std::to_string(m_wordCount) +
                                  " words): built with another vocabulary?");
     }
   }
@@ -52,8 +52,15 @@ bool KeyframeDatabase::remove(KeyframeId id)
     return false;
   }
   for (const BowEntry &e : it->second) {
-    std::vector<KeyframeId> &holders = m_index[e.wordId];
+    const auto word = m_index.find(e.wordId);
+    if (word == m_index.end()) {
+      continue;
+    }
+    std::vector<KeyframeId> &holders = word->second;
     holders.erase(std::remove(holders.begin(), holders.end(), id), holders.end());
+    if (holders.empty()) {
+      m_index.erase(word);
+    }
   }
   m_vectors.erase(it);
   return true;
@@ -62,9 +69,7 @@ bool KeyframeDatabase::remove(KeyframeId id)
 void KeyframeDatabase::clear()
 {
   std::unique_lock<std::shared_mutex> lock(m_mutex);
-  for (std::vector<KeyframeId> &holders : m_index) {
-    holders.clear();
-  }
+  m_index.clear();
   m_vectors.clear();
 }
 
@@ -110,10 +115,11 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
   // 1. Keyframes sharing words, with the count of shared words.
   std::unordered_map<KeyframeId, int> common;
   for (const BowEntry &e : bow) {
-    if (e.wordId >= m_index.size()) {
-      continue; // another vocabulary's word: shares nothing here
+    const auto word = m_index.find(e.wordId); // absent: no keyframe holds it (or another vocabulary's word)
+    if (word == m_index.end()) {
+      continue;
     }
-    for (KeyframeId id : m_index[e.wordId]) {
+    for (KeyframeId id : word->second) {
       ++common[id];
     }
   }

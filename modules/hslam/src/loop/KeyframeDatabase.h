@@ -88,7 +88,7 @@ public:
   void clear();
   std::size_t size() const;
   bool contains(KeyframeId id) const;
-  std::size_t wordCount() const { return m_index.size(); }
+  std::size_t wordCount() const { return m_wordCount; }
 
   //! Candidates for \e bow, best first (see the class comment).
   std::vector<Candidate> query(const BowVector &bow, const Query &query) const;
@@ -102,7 +102,10 @@ public:
 private:
   KeyframeDatabaseOptions m_options;
   mutable std::shared_mutex m_mutex;
-  std::vector<std::vector<KeyframeId>> m_index; //!< keyframes holding each word
+  std::size_t m_wordCount = 0; //!< words of the vocabulary
+  //! Keyframes holding each word, for the words some keyframe holds (a map: one empty list per word of the shipped
+  //! vocabulary's 413,203 took 10 MB before the first keyframe).
+  std::unordered_map<std::uint32_t, std::vector<KeyframeId>> m_index;
   std::unordered_map<KeyframeId, BowVector> m_vectors;
 };
 } // namespace hslam
