@@ -117,6 +117,7 @@ private:
     bool needKeyframe = false;
   };
 
+  //! Not initialised yet: one two-view attempt (SlamSystemInitialization.cpp, like the backfill below).
   vpHSlam::State initialize(const FramePtr &frame, const vpImage<unsigned char> &I, double exposure);
   //! After initialisation: give poses to the frames between the two initial keyframes (tracked backwards).
   void backfillInitializationFrames(const SE3d &c2Mc1, int firstFrameId, int secondFrameId);
