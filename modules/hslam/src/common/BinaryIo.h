@@ -75,25 +75,25 @@ private:
 //! Little-endian words of a byte buffer (no bounds check: the caller has checked the size). Inline, one load on a
 //! little-endian host: the vocabulary reader calls them for every record, and the byte-by-byte assembly (which GCC
 //! does not fuse into one load) made hashing the shipped vocabulary about 40 % slower.
+template <typename Word> inline Word loadLittleEndian(const std::uint8_t *p)
+{
+  Word word = 0;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::memcpy(&word, p, sizeof(word));
+#else
+  for (std::size_t b = 0; b < sizeof(Word); ++b) {
+    word |= static_cast<Word>(static_cast<Word>(p[b]) << (8 * b));
+  }
+#endif
+  return word;
+}
 inline std::uint32_t loadU32(const std::uint8_t *p)
 {
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  std::uint32_t word;
-  std::memcpy(&word, p, sizeof(word));
-  return word;
-#else
-  return std::uint32_t(p[0]) | (std::uint32_t(p[1]) << 8) | (std::uint32_t(p[2]) << 16) | (std::uint32_t(p[3]) << 24);
-#endif
+  return loadLittleEndian<std::uint32_t>(p);
 }
 inline std::uint64_t loadU64(const std::uint8_t *p)
 {
-#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
-  std::uint64_t word;
-  std::memcpy(&word, p, sizeof(word));
-  return word;
-#else
-  return std::uint64_t(loadU32(p)) | (std::uint64_t(loadU32(p + 4)) << 32);
-#endif
+  return loadLittleEndian<std::uint64_t>(p);
 }
 
 /*!
