@@ -64,16 +64,12 @@ inline float huberEnergy(float residual, float threshold, float &weight)
 //! Slack of patternSegmentInside() for the rounding of accumulated positions, pixels.
 constexpr float kSegmentInsideSlack = 0.5f;
 
-//! True when the pattern at every position of the segment (x0, y0)-(x1, y1) is inside \e level for bilinear
-//! interpolation (PyramidLevel::isInside with margin 0), with kSegmentInsideSlack to spare.
-bool patternSegmentInside(const PyramidLevel &level, const std::array<Eigen::Vector2f, kPatternSize> &offsets, float x0,
+//! True when the pattern (offsets within the box lo-hi) at every position of the segment (x0, y0)-(x1, y1) is
+//! inside \e level for bilinear interpolation (PyramidLevel::isInside with margin 0), with kSegmentInsideSlack to
+//! spare.
+bool patternSegmentInside(const PyramidLevel &level, const Eigen::Vector2f &lo, const Eigen::Vector2f &hi, float x0,
                           float y0, float x1, float y1)
 {
-  Eigen::Vector2f lo = offsets[0], hi = offsets[0];
-  for (const Eigen::Vector2f &o : offsets) {
-    lo = lo.cwiseMin(o);
-    hi = hi.cwiseMax(o);
-  }
   const float xLo = std::min(x0, x1) + lo.x(), xHi = std::max(x0, x1) + hi.x();
   const float yLo = std::min(y0, y1) + lo.y(), yHi = std::max(y0, y1) + hi.y();
   return xLo >= kSegmentInsideSlack && yLo >= kSegmentInsideSlack &&
@@ -191,6 +187,11 @@ TraceContext ImmaturePointTracer::makeContext(const Frame &host, const Frame &ta
   for (int k = 0; k < kPatternSize; ++k) {
     context.rotatedPattern[static_cast<size_t>(k)] =
         Rplane * Eigen::Vector2f(static_cast<float>(kPattern[k][0]), static_cast<float>(kPattern[k][1]));
+  }
+  context.rotatedPatternMin = context.rotatedPatternMax = context.rotatedPattern[0];
+  for (const Eigen::Vector2f &o : context.rotatedPattern) {
+    context.rotatedPatternMin = context.rotatedPatternMin.cwiseMin(o);
+    context.rotatedPatternMax = context.rotatedPatternMax.cwiseMax(o);
   }
   return context;
 }
@@ -356,7 +357,8 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
   // (same sums in the same order either way). The positions are accumulated step by step, so the test keeps a
   // slack for their rounding.
   const bool segmentInside =
-      numSteps > 0 && patternSegmentInside(target, offsets, ptx, pty, ptx + static_cast<float>(numSteps - 1) * stepU,
+      numSteps > 0 && patternSegmentInside(target, context.rotatedPatternMin, context.rotatedPatternMax, ptx, pty,
+                                           ptx + static_cast<float>(numSteps - 1) * stepU,
                                            pty + static_cast<float>(numSteps - 1) * stepV);
   std::array<float, kMaxTraceSteps> errors;
   float bestU = 0.f, bestV = 0.f, bestEnergy = kNoEnergy;

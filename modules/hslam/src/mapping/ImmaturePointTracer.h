@@ -41,14 +41,16 @@ namespace hslam
 */
 struct TraceContext {
   EIGEN_MAKE_ALIGNED_OPERATOR_NEW
-  Eigen::Matrix3f KRKi = Eigen::Matrix3f::Identity();       //!< K R_th K^-1 (host pixel -> target pixel at infinity)
-  Eigen::Vector3f Kt = Eigen::Vector3f::Zero();             //!< K t_th (times idepth: the parallax part)
-  float aji = 1.f;                                          //!< brightness transfer: I_target ~ aji I_host + bji
-  float bji = 0.f;                                          //!< intensity units
-  float maxPixelSearch = 0.f;                               //!< longest searched segment, pixels
-  std::array<Eigen::Vector2f, kPatternSize> rotatedPattern; //!< pattern offsets as seen in the target, pixels
-  const PyramidLevel *hostLevel = nullptr;                  //!< level 0 of the host (gradient structure of the patch)
-  const PyramidLevel *targetLevel = nullptr;                //!< level 0 of the target (searched image)
+  Eigen::Matrix3f KRKi = Eigen::Matrix3f::Identity();          //!< K R_th K^-1 (host pixel -> target pixel at infinity)
+  Eigen::Vector3f Kt = Eigen::Vector3f::Zero();                //!< K t_th (times idepth: the parallax part)
+  float aji = 1.f;                                             //!< brightness transfer: I_target ~ aji I_host + bji
+  float bji = 0.f;                                             //!< intensity units
+  float maxPixelSearch = 0.f;                                  //!< longest searched segment, pixels
+  std::array<Eigen::Vector2f, kPatternSize> rotatedPattern;    //!< pattern offsets as seen in the target, pixels
+  Eigen::Vector2f rotatedPatternMin = Eigen::Vector2f::Zero(); //!< bounding box of rotatedPattern: lowest offsets
+  Eigen::Vector2f rotatedPatternMax = Eigen::Vector2f::Zero(); //!< ... and highest offsets, pixels
+  const PyramidLevel *hostLevel = nullptr;   //!< level 0 of the host (gradient structure of the patch)
+  const PyramidLevel *targetLevel = nullptr; //!< level 0 of the target (searched image)
 };
 
 //! Details of one trace, for statistics, display and tests.
