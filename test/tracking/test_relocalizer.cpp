@@ -1,13 +1,16 @@
 // Relocalisation on an exact synthetic scene: three places, a lost frame near one of them; the keyframe database
 // proposes that place first, BoW matching + PnP RANSAC + pose-only refinement recover the pose. A frame of pure
-// distractors is not relocalised.
+// distractors is not relocalised. With most matches wrong (loose matching after a long cover), AP3P RANSAC and the
+// refinement on its consensus still find the pose.
 #include "features/OrbVocabulary.h"
 #include "features/VocabularyTrainer.h"
 #include "loop/KeyframeDatabase.h"
 #include "tracking/Relocalizer.h"
+#include "tracking/WindowRelocalization.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 
 namespace
@@ -145,5 +148,47 @@ TEST_F(Relocalization, AFrameOfDistractorsIsNotRelocalised)
   const hslam::RelocalizationResult result = hslam::relocalize(frame, all, kK);
   EXPECT_FALSE(result.success);
   EXPECT_EQ(result.candidatesTried, 3);
+}
+TEST_F(Relocalization, FindsThePoseWhenMostMatchesAreWrong)
+{
+  // 40 right matches among 300: the other keypoints carry the descriptors of other points of the keyframe at random
+  // pixels (a repeated texture, or the loose matching WindowRelocalization uses), so every point matches somewhere.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0., 0.5);
+  std::uniform_real_distribution<double> u(0., 640.), v(0., 480.);
+  const SE3d truth = lookingFrom(Eigen::Vector3d(0., 0.15, 0.), Eigen::Vector3d(10.3, 0.1, -0.2));
+  const hslam::RelocalizationKeyframe &kf = m_keyframes[1];
+  hslam::RelocalizationFrame frame;
+  std::vector<bool> right;
+  for (std::size_t i = 0; i < kf.wX.size(); ++i) {
+    const Eigen::Vector3d cX = truth * kf.wX[i];
+    Eigen::Vector2d uv(kK.fx * cX.x() / cX.z() + kK.cx + noise(rng), kK.fy * cX.y() / cX.z() + kK.cy + noise(rng));
+    const bool inView = uv.x() >= 0 && uv.y() >= 0 && uv.x() < 640 && uv.y() < 480;
+    const bool isRight = inView && std::count(right.begin(), right.end(), true) < 40;
+    if (!isRight) {
+      uv = Eigen::Vector2d(u(rng), v(rng));
+    }
+    OrbDescriptor d = kf.descriptors[i];
+    for (int f = 0; f < 8; ++f) {
+      const int b = static_cast<int>(rng() % 256);
+      d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
+    }
+    frame.uv.push_back(uv);
+    frame.descriptors.push_back(d);
+    right.push_back(isRight);
+  }
+  ASSERT_EQ(std::count(right.begin(), right.end(), true), 40);
+
+  hslam::RelocalizerOptions options = hslam::WindowRelocalization::matchingOptions();
+  options.minInliers = 30;
+  const hslam::RelocalizationResult result = hslam::relocalize(frame, {&kf}, kK, options);
+  ASSERT_TRUE(result.success) << result.matches << " matches, " << result.inliers << " inliers";
+  EXPECT_GE(result.matches, 250);
+  EXPECT_GE(result.inliers, 35);
+  EXPECT_LE(result.inliers, 45); // the right ones, and no more than a few wrong ones that happen to agree
+  EXPECT_LT((result.cTw.inverse().translation() - truth.inverse().translation()).norm(), 0.02);
+  EXPECT_LT((result.cTw.inverse() * truth).log().tail<3>().norm() * 180. / M_PI, 0.3);
+  ASSERT_EQ(static_cast<int>(result.inlierObservations.size()), result.inliers);
+  EXPECT_GE(hslam::countReprojectionInliers(truth, result.inlierObservations, kK, 5.991), result.inliers - 3);
 }
 } // namespace

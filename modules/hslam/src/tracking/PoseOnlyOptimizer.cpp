@@ -92,4 +92,16 @@ PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit, const std::vector<Reproject
   result.inlierRmsePx = result.inliers > 0 ? std::sqrt(sum / result.inliers) : 0.;
   return result;
 }
+int countReprojectionInliers(const SE3d &cTw, const std::vector<ReprojectionObservation> &observations,
+                             const PinholeIntrinsics &K, double chi2, double minDepth)
+{
+  int inliers = 0;
+  for (const ReprojectionObservation &obs : observations) {
+    Eigen::Vector2d r;
+    if (reprojectionResidual(cTw, obs, K, minDepth, r) && r.squaredNorm() < chi2 * obs.sigma2) {
+      ++inliers;
+    }
+  }
+  return inliers;
+}
 } // namespace hslam

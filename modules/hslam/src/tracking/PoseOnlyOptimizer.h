@@ -68,6 +68,11 @@ VISP_EXPORT bool reprojectionResidual(const SE3d &cTw, const ReprojectionObserva
                                       double minDepth, Eigen::Vector2d &residual,
                                       Eigen::Matrix<double, 2, 6> *jacobian = nullptr);
 
+//! Observations whose squared reprojection error at \e cTw, over their sigma2, is below \e chi2 (in front of the
+//! camera).
+VISP_EXPORT int countReprojectionInliers(const SE3d &cTw, const std::vector<ReprojectionObservation> &observations,
+                                         const PinholeIntrinsics &K, double chi2, double minDepth = 1e-6);
+
 //! Robust pose-only optimisation from \e cTwInit (see the file comment).
 VISP_EXPORT PoseOnlyResult optimizePoseOnly(const SE3d &cTwInit,
                                             const std::vector<ReprojectionObservation> &observations,

@@ -40,6 +40,8 @@ struct RelocalizationFrame {
   std::vector<Eigen::Vector2d> uv;        //!< keypoint pixels
   std::vector<OrbDescriptor> descriptors; //!< one per keypoint
   FeatureVector direct;                   //!< with the same levelsUp as the keyframes'
+  //! Scale factor of the pyramid level each keypoint was detected at (its pixel noise grows with it); empty: 1.
+  std::vector<float> scale;
 };
 
 //! Settings (defaults: ORB-SLAM2's relocalisation).
@@ -48,6 +50,7 @@ struct RelocalizerOptions {
   float ratio = 0.75f;            //!< best below ratio x second best (ORB-SLAM2: 0.75 in relocalisation)
   int minMatches = 15;            //!< BoW matches needed to try PnP with a keyframe
   int ransacIterations = 300;     //!< PnP RANSAC iterations
+  bool minimalP3P = false;        //!< AP3P hypotheses from 4 matches instead of EPnP's 5 (for low inlier ratios)
   double ransacThresholdPx = 2.5; //!< PnP inlier threshold, pixels (sqrt(5.991) at level 0)
   double ransacConfidence = 0.99; //!< PnP RANSAC confidence
   int minInliers = 50;            //!< inliers after refinement to accept (ORB-SLAM2: 50)
@@ -69,6 +72,7 @@ struct RelocalizationResult {
   int matches = 0;     //!< BoW matches with that keyframe (on failure: the most with any candidate)
   int inliers = 0;     //!< after refinement (on failure: the most with any candidate)
   int candidatesTried = 0;
+  std::vector<ReprojectionObservation> inlierObservations; //!< the matches the pose was refined on (on success)
 };
 
 //! BoW-restricted matching (ORB-SLAM2 SearchByBoW): pairs (keyframe point, frame keypoint).
