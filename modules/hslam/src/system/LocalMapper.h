@@ -46,6 +46,7 @@ class OrbVocabulary;
 struct TwoViewInitialization;
 struct RelocalizationKeyframe;
 struct RelocalizationFrame;
+struct WindowView;
 struct PairInformation;
 struct Sim3Estimate;
 struct GlobalBundleJob;
@@ -199,6 +200,8 @@ public:
   */
   std::vector<RelocalizationKeyframe> relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates,
                                                                int preferred = -1) const;
+  //! The window's keyframes (id, pose, frame with its raw image), oldest first: WindowRelocalization's input.
+  std::vector<WindowView> windowViews() const;
   /*!
     Index every keyframe of the global map for relocalisation (localisation-only in a loaded map): BoW vector of its
     described points, corners with their world positions. False without a vocabulary.

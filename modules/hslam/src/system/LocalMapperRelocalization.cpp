@@ -6,6 +6,7 @@
 #include "system/LocalMapper.h"
 
 #include "system/LocalMapperImpl.h"
+#include "tracking/WindowRelocalization.h"
 
 #include <algorithm>
 #include <cmath>
@@ -164,6 +165,19 @@ int LocalMapper::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyfra
     }
   }
   return best;
+}
+
+std::vector<WindowView> LocalMapper::windowViews() const
+{
+  std::vector<WindowView> views;
+  for (const KeyframePtr &kf : m_window) {
+    WindowView v;
+    v.id = kf->id();
+    v.cMw = kf->frame->cMw;
+    v.frame = kf->frame;
+    views.push_back(std::move(v));
+  }
+  return views;
 }
 
 bool LocalMapper::indexesKeyframes() const

@@ -61,6 +61,7 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
       (m_params.system.mode == vpHSlamParameters::modeSlam && m_params.tracking.relocalize)) {
     m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                                m_preprocessor.height());
+    m_windowRelocalization = std::make_unique<WindowRelocalization>(m_preprocessor.intrinsics());
   }
   if (!m_params.system.deterministic) {
     startMappingThread();
@@ -200,22 +201,38 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   AffineBrightness affine;
   CoarseTrackingResult result;
   const bool success = estimatePose(frame, history, newMref, affine, result);
+  const bool relocalizedNow = m_relocalizing;
   if (m_relocalizing) {
     // Accepted only when the map's corners confirm it too (tracking.relocalizationCheckInliers, 15 by default): a lost
     // camera pointed at something new can be aligned photometrically to a wrong place (measured on 7-Scenes after
     // covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with a gain change of e^-1.4).
     // Right relocalisations after a 5-frame cover had 16-58 inliers; the former 20 (twice a tracked frame's) refused
     // four of five of them in slam mode with direct tracking (point budgets 480-520).
+    // The relocalisation's own matches confirm as well: the window's corners are few, and after a long cover the
+    // camera often sees them from too far away to match 15 (7-Scenes, frames 120-160 black: 4-8 corner inliers
+    // while 30-50 of the window's triangulated ORB points agreed with the aligned pose).
+    const SE3d cMwAligned = newMref * wMref.inverse();
+    const int confirmedByRelocalization =
+        success ? countReprojectionInliers(cMwAligned, m_relocalizationEvidence, m_preprocessor.intrinsics(),
+                                           PoseOnlyOptions().chi2Threshold)
+                : 0;
     VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation check: alignment "
                                              << (success ? "ok" : coarseTrackingStatusName(result.status)) << ", "
                                              << m_indirect.matches << " ORB matches, " << m_indirect.inliers
                                              << " inliers"
-                                             << (m_indirect.recovered ? " (found without prediction)" : ""));
-    if (!success || !m_indirect.usable || m_indirect.inliers < m_params.tracking.relocalizationCheckInliers) {
+                                             << (m_indirect.recovered ? " (found without prediction)" : "") << ", "
+                                             << confirmedByRelocalization << " of " << m_relocalizationEvidence.size()
+                                             << " relocalisation matches agree");
+    const int needed = m_params.tracking.relocalizationCheckInliers;
+    const bool confirmed = (m_indirect.usable && m_indirect.inliers >= needed) || confirmedByRelocalization >= needed;
+    if (!success || !confirmed) {
       m_runStats.addTrackingMs(nowMs() - t0);
       return vpHSlam::stateLost; // the relocalised pose did not hold against the map: try the next frame
     }
     m_relocalizing = false;
+    if (m_windowRelocalization) {
+      m_windowRelocalization->clear(); // the window moves on: its described keyframes would go stale
+    }
     ++m_relocSuccesses;
     VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": relocalised after " << frame->timestamp - m_lostSince
                                             << " s, tracking resumes in the same map");
@@ -254,7 +271,10 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   const SE3d refMc = newMref.inverse();
   m_recorder.addFrame(frame->id, frame->timestamp, m_trackerRefKeyframe, refMc, m_segment);
   m_lastAffine = affine;
-  m_prelastFrameId = m_lastFrameId;
+  // After a relocalisation the last tracked frame is from before the loss: no velocity to extrapolate from it
+  // (measured on 7-Scenes with frames 120-135 black: the jump across the loss taken as one frame's motion sent the
+  // next frames' predictions tens of pixels off and the window collapsed within 8 frames).
+  m_prelastFrameId = relocalizedNow ? -1 : m_lastFrameId;
   m_lastFrameId = frame->id;
 
   // A failed alignment keeps the predicted pose (DSO) but neither makes a keyframe nor feeds mapping.

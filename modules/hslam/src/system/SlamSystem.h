@@ -42,6 +42,7 @@
 #include "system/TrajectoryRecorder.h"
 #include "tracking/CoarseTracker.h"
 #include "tracking/HybridTracker.h"
+#include "tracking/WindowRelocalization.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlam.h>
@@ -168,8 +169,11 @@ private:
   //! (a vector's erase assigns vpImages, and ViSP 3.5's vpImage assignment leaked their buffers: LeakSanitizer).
   std::deque<PendingFrame> m_pendingFrames;
   std::unique_ptr<CoarseTracker> m_backfillTracker;
-  std::unique_ptr<HybridTracker> m_hybrid; //!< keypoints and indirect step (null in direct mode)
-  IndirectStepResult m_indirect;           //!< the current frame's indirect step (its term is used by m_tracker)
+  std::unique_ptr<HybridTracker> m_hybrid;                      //!< keypoints and indirect step (null in direct mode)
+  std::unique_ptr<WindowRelocalization> m_windowRelocalization; //!< with m_hybrid: the window's triangulated ORB
+  //! Matches of the last relocalisation that found a pose (world point, pixel): they can confirm the aligned pose.
+  std::vector<ReprojectionObservation> m_relocalizationEvidence;
+  IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
   AffineBrightness m_trackerRefAffine; //!< brightness of the reference when it was set

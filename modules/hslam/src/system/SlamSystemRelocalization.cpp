@@ -14,6 +14,7 @@ namespace hslam
 bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &history)
 {
   ++m_relocAttempts;
+  m_relocalizationEvidence.clear();
   m_hybrid->extract(frame->raw);
   RelocalizationFrame lost = m_hybrid->relocalizationFrame();
   if (lost.descriptors.empty()) {
@@ -34,14 +35,35 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
   }
   RelocalizerOptions options;
   options.minInliers = m_params.tracking.relocalizationMinInliers;
-  const RelocalizationResult r = relocalize(lost, pointers, m_preprocessor.intrinsics(), options);
+  RelocalizationResult r = relocalize(lost, pointers, m_preprocessor.intrinsics(), options);
   VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
                                            << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
                                            << " tried, keyframe " << r.keyframeId << ", " << r.matches << " matches, "
                                            << r.inliers << " inliers");
+  if (!r.success && m_windowRelocalization && m_params.tracking.relocalizeInWindow) {
+    // The window's keyframes with ORB points triangulated between them (see WindowRelocalization.h).
+    std::vector<WindowView> views;
+    {
+      std::lock_guard<std::mutex> lock(m_mapperMutex);
+      views = m_mapper->windowViews();
+    }
+    const double t0 = nowMs();
+    const RelocalizationKeyframe window = m_windowRelocalization->windowPoints(views);
+    const double t1 = nowMs();
+    const RelocalizationFrame described = m_windowRelocalization->describe(frame->raw);
+    RelocalizerOptions windowOptions = WindowRelocalization::matchingOptions();
+    windowOptions.minInliers = options.minInliers;
+    r = relocalize(described, {&window}, m_preprocessor.intrinsics(), windowOptions);
+    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": window relocalisation " << (r.success ? "found" : "no")
+                                             << " pose, " << window.wX.size() << " triangulated points, "
+                                             << described.uv.size() << " keypoints, " << r.matches << " matches, "
+                                             << r.inliers << " inliers; " << t1 - t0 << " ms for the window's points, "
+                                             << nowMs() - t1 << " ms for the frame");
+  }
   if (!r.success) {
     return false;
   }
+  m_relocalizationEvidence = r.inlierObservations;
   // The joint optimisation against the current tracking reference refines (and checks) the pose.
   const SE3d wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
   history.valid = true;

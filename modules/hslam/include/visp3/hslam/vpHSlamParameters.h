@@ -153,6 +153,8 @@ public:
     int relocalizationMinInliers = 30;   //!< PnP inliers after refinement to accept a relocalisation
     int relocalizationCheckInliers = 15; //!< ORB inliers of the joint alignment that confirm a relocalised pose (wrong
                                          //!< alignments measured with 0-3, right ones with 16-58)
+    bool relocalizeInWindow = true;      //!< also match a lost frame to ORB points triangulated between the window's
+                                    //!< keyframes (found the camera after 40-frame covers where BoW candidates fail)
   };
 
   /*!

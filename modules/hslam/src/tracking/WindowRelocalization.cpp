@@ -1,0 +1,251 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "tracking/WindowRelocalization.h"
+
+#include "mapping/TwoViewGeometry.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+//! Chi-square 95 % bounds for 1 and 2 degrees of freedom (ORB-SLAM2's epipolar and reprojection tests).
+constexpr double kChi2OneDof = 3.841;
+constexpr double kChi2TwoDof = 5.991;
+constexpr double kPi = 3.14159265358979323846;
+//! Larger than any Hamming distance of 256-bit descriptors.
+constexpr int kNoDistance = 257;
+
+//! Squared reprojection error of the camera-frame point \e X at pixel \e uv.
+double reprojectionErrorSq(const Eigen::Vector3d &X, const Eigen::Vector2d &uv, const PinholeIntrinsics &K)
+{
+  const double u = K.fx * X.x() / X.z() + K.cx;
+  const double v = K.fy * X.y() / X.z() + K.cy;
+  return (u - uv.x()) * (u - uv.x()) + (v - uv.y()) * (v - uv.y());
+}
+
+Eigen::Vector2d normalised(const Eigen::Vector2d &uv, const PinholeIntrinsics &K)
+{
+  return Eigen::Vector2d((uv.x() - K.cx) / K.fx, (uv.y() - K.cy) / K.fy);
+}
+} // namespace
+
+int triangulateViews(const DescribedView &a, const DescribedView &b, const PinholeIntrinsics &K,
+                     const ViewTriangulationOptions &options, std::vector<unsigned char> &done,
+                     std::vector<Eigen::Vector3d> &wX, std::vector<OrbDescriptor> &descriptors)
+{
+  const std::size_t na = std::min(a.uv.size(), std::min(a.descriptors.size(), a.scale.size()));
+  const std::size_t nb = std::min(b.uv.size(), std::min(b.descriptors.size(), b.scale.size()));
+  done.resize(a.uv.size(), 0);
+  if (na == 0 || nb == 0) {
+    return 0;
+  }
+  // X_b = R X_a + t; pixels of b on the epipolar line of a pixel of a: x_b^T F x_a = 0 with F = K^-T [t]x R K^-1.
+  const SE3d bMa = b.cMw * a.cMw.inverse();
+  const Eigen::Matrix3d R = bMa.rotationMatrix();
+  const Eigen::Vector3d t = bMa.translation();
+  if (!(t.norm() > 0.)) {
+    return 0; // no baseline: nothing to triangulate
+  }
+  Eigen::Matrix3d tx;
+  tx << 0., -t.z(), t.y(), t.z(), 0., -t.x(), -t.y(), t.x(), 0.;
+  Eigen::Matrix3d Kinv;
+  Kinv << 1. / K.fx, 0., -K.cx / K.fx, 0., 1. / K.fy, -K.cy / K.fy, 0., 0., 1.;
+  const Eigen::Matrix3d F = Kinv.transpose() * tx * R * Kinv;
+  const double minCosParallax = std::cos(options.minParallaxDeg * kPi / 180.);
+  const Eigen::Matrix3d Rwa = a.cMw.inverse().rotationMatrix();
+  const Eigen::Matrix3d Rwb = b.cMw.inverse().rotationMatrix();
+  const SE3d wMa = a.cMw.inverse();
+
+  // Best keypoint of b for each free keypoint of a (within the epipolar band), then one keypoint of b per match.
+  std::vector<int> matchOfB(nb, -1), distanceOfB(nb, kNoDistance);
+  for (std::size_t i = 0; i < na; ++i) {
+    if (done[i]) {
+      continue;
+    }
+    const Eigen::Vector3d line = F * Eigen::Vector3d(a.uv[i].x(), a.uv[i].y(), 1.);
+    const double norm2 = line.x() * line.x() + line.y() * line.y();
+    if (!(norm2 > 0.)) {
+      continue;
+    }
+    int best = kNoDistance, second = kNoDistance, bestIndex = -1;
+    for (std::size_t j = 0; j < nb; ++j) {
+      const double d = line.x() * b.uv[j].x() + line.y() * b.uv[j].y() + line.z();
+      const double sigma = options.epipolarSigmaPx * static_cast<double>(b.scale[j]);
+      if (d * d > kChi2OneDof * sigma * sigma * norm2) {
+        continue;
+      }
+      const int distance = hammingDistance(a.descriptors[i], b.descriptors[j]);
+      if (distance < best) {
+        second = best;
+        best = distance;
+        bestIndex = static_cast<int>(j);
+      } else if (distance < second) {
+        second = distance;
+      }
+    }
+    if (bestIndex < 0 || best > options.maxDistance ||
+        !(static_cast<float>(best) < options.ratio * static_cast<float>(second))) {
+      continue;
+    }
+    const std::size_t j = static_cast<std::size_t>(bestIndex);
+    if (best < distanceOfB[j]) {
+      matchOfB[j] = static_cast<int>(i);
+      distanceOfB[j] = best;
+    }
+  }
+
+  int added = 0;
+  for (std::size_t j = 0; j < nb; ++j) {
+    if (matchOfB[j] < 0) {
+      continue;
+    }
+    const std::size_t i = static_cast<std::size_t>(matchOfB[j]);
+    const Eigen::Vector2d xa = normalised(a.uv[i], K);
+    const Eigen::Vector2d xb = normalised(b.uv[j], K);
+    const Eigen::Vector3d rayA = Rwa * Eigen::Vector3d(xa.x(), xa.y(), 1.);
+    const Eigen::Vector3d rayB = Rwb * Eigen::Vector3d(xb.x(), xb.y(), 1.);
+    if (rayA.dot(rayB) / (rayA.norm() * rayB.norm()) > minCosParallax) {
+      continue; // too little parallax for a depth
+    }
+    Eigen::Vector3d Xa;
+    if (!triangulateLinear(xa, xb, R, t, Xa)) {
+      continue;
+    }
+    const Eigen::Vector3d Xb = R * Xa + t;
+    if (!(Xa.z() > 0.) || !(Xb.z() > 0.)) {
+      continue;
+    }
+    const double sa = options.reprojectionSigmaPx * static_cast<double>(a.scale[i]);
+    const double sb = options.reprojectionSigmaPx * static_cast<double>(b.scale[j]);
+    if (reprojectionErrorSq(Xa, a.uv[i], K) > kChi2TwoDof * sa * sa ||
+        reprojectionErrorSq(Xb, b.uv[j], K) > kChi2TwoDof * sb * sb) {
+      continue;
+    }
+    wX.push_back(wMa * Xa);
+    descriptors.push_back(a.descriptors[i]);
+    done[i] = 1;
+    ++added;
+  }
+  return added;
+}
+
+WindowRelocalization::WindowRelocalization(const PinholeIntrinsics &K, const WindowRelocalizationOptions &options)
+    : m_K(K), m_options(options), m_extractor(options.orb)
+{
+}
+
+RelocalizationFrame WindowRelocalization::describe(const vpImage<unsigned char> &raw)
+{
+  RelocalizationFrame frame;
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat rows;
+  m_extractor.extract(raw, keypoints, rows);
+  const std::vector<OrbDescriptor> descriptors = descriptorsFromMat(rows);
+  const std::size_t n = std::min(keypoints.size(), descriptors.size());
+  frame.uv.reserve(n);
+  frame.descriptors.reserve(n);
+  frame.scale.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    frame.uv.emplace_back(keypoints[k].pt.x, keypoints[k].pt.y);
+    frame.descriptors.push_back(descriptors[k]);
+    frame.scale.push_back(std::pow(m_options.orb.scaleFactor, static_cast<float>(keypoints[k].octave)));
+  }
+  return frame;
+}
+
+DescribedView WindowRelocalization::describeView(const WindowView &view)
+{
+  DescribedView out;
+  out.id = view.id;
+  out.cMw = view.cMw;
+  if (!view.frame || view.frame->raw.getSize() == 0) {
+    return out;
+  }
+  std::vector<cv::KeyPoint> keypoints;
+  cv::Mat rows;
+  m_extractor.extract(view.frame->raw, keypoints, rows);
+  out.descriptors = descriptorsFromMat(rows);
+  const std::size_t n = std::min(keypoints.size(), out.descriptors.size());
+  out.descriptors.resize(n);
+  out.uv.reserve(n);
+  out.scale.reserve(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    out.uv.emplace_back(keypoints[k].pt.x, keypoints[k].pt.y);
+    out.scale.push_back(std::pow(m_options.orb.scaleFactor, static_cast<float>(keypoints[k].octave)));
+  }
+  return out;
+}
+
+void WindowRelocalization::clear()
+{
+  m_views.clear();
+  m_points = RelocalizationKeyframe();
+  m_pointsFrom.clear();
+}
+
+RelocalizerOptions WindowRelocalization::matchingOptions()
+{
+  RelocalizerOptions options;
+  options.ratio = 0.9f;
+  options.maxDistance = 64;
+  options.minimalP3P = true;
+  options.ransacIterations = 2000;
+  return options;
+}
+
+RelocalizationKeyframe WindowRelocalization::windowPoints(const std::vector<WindowView> &views)
+{
+  RelocalizationKeyframe out;
+  if (views.empty()) {
+    return out;
+  }
+  std::vector<std::pair<int, SE3d>> from;
+  for (const WindowView &view : views) {
+    from.emplace_back(view.id, view.cMw);
+  }
+  const auto samePose = [](const std::pair<int, SE3d> &x, const std::pair<int, SE3d> &y) {
+    return x.first == y.first && x.second.translation() == y.second.translation() &&
+           x.second.unitQuaternion().coeffs() == y.second.unitQuaternion().coeffs();
+  };
+  if (from.size() == m_pointsFrom.size() && std::equal(from.begin(), from.end(), m_pointsFrom.begin(), samePose)) {
+    return m_points;
+  }
+  std::map<int, DescribedView> described;
+  for (const WindowView &view : views) {
+    // A keyframe's image never changes: its features are kept across queries; its pose is taken anew.
+    const auto cached = m_views.find(view.id);
+    DescribedView d = cached != m_views.end() ? cached->second : describeView(view);
+    d.cMw = view.cMw;
+    described[view.id] = std::move(d);
+  }
+  m_views = described; // keyframes that left the window are forgotten
+  out.id = views.back().id;
+  for (const auto &entry : described) {
+    const DescribedView &a = entry.second;
+    // Partners with the widest baseline first: their depths are the best conditioned.
+    std::vector<const DescribedView *> partners;
+    for (const auto &other : described) {
+      if (other.first != entry.first) {
+        partners.push_back(&other.second);
+      }
+    }
+    const Eigen::Vector3d centreA = a.cMw.inverse().translation();
+    std::sort(partners.begin(), partners.end(), [&centreA](const DescribedView *x, const DescribedView *y) {
+      const double dx = (x->cMw.inverse().translation() - centreA).norm();
+      const double dy = (y->cMw.inverse().translation() - centreA).norm();
+      return dx > dy || (dx == dy && x->id < y->id);
+    });
+    std::vector<unsigned char> done(a.uv.size(), 0);
+    for (const DescribedView *b : partners) {
+      triangulateViews(a, *b, m_K, m_options.triangulation, done, out.wX, out.descriptors);
+    }
+  }
+  m_points = out;
+  m_pointsFrom = std::move(from);
+  return out;
+}
+} // namespace hslam
