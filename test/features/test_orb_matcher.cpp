@@ -8,6 +8,8 @@
 #include <visp3/core/vpImageTools.h>
 #include <visp3/io/vpImageIo.h>
 
+#include "HSlamTestDescriptors.h"
+
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
@@ -21,23 +23,8 @@ using hslam::FrameKeypoint;
 using hslam::OrbDescriptor;
 using hslam::ProjectedPoint;
 
-OrbDescriptor randomDescriptor(std::mt19937_64 &rng)
-{
-  OrbDescriptor d;
-  for (auto &w : d.words) {
-    w = rng();
-  }
-  return d;
-}
-
-OrbDescriptor flipBits(OrbDescriptor d, int bits, std::mt19937_64 &rng)
-{
-  for (int i = 0; i < bits; ++i) {
-    const int b = static_cast<int>(rng() % 256);
-    d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
-  }
-  return d;
-}
+using hslam_test::flipBits;
+using hslam_test::randomDescriptor;
 
 TEST(OrbMatcher, FindsTheTrueKeypointsAmongDistractorsAndDropsRotationOutliers)
 {

@@ -8,6 +8,8 @@
 #include "tracking/Relocalizer.h"
 #include "tracking/WindowRelocalization.h"
 
+#include "HSlamTestDescriptors.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,14 +22,8 @@ using hslam::SE3d;
 
 const hslam::PinholeIntrinsics kK{500., 500., 319.5, 239.5};
 
-OrbDescriptor randomDescriptor(std::mt19937_64 &rng)
-{
-  OrbDescriptor d;
-  for (auto &w : d.words) {
-    w = rng();
-  }
-  return d;
-}
+using hslam_test::flipBits;
+using hslam_test::randomDescriptor;
 
 SE3d lookingFrom(const Eigen::Vector3d &rotationVector, const Eigen::Vector3d &cameraCentre)
 {
@@ -84,13 +80,8 @@ protected:
         if (uv.x() < 0 || uv.y() < 0 || uv.x() >= 640 || uv.y() >= 480) {
           continue;
         }
-        OrbDescriptor d = kf.descriptors[i];
-        for (int f = 0; f < 8; ++f) {
-          const int b = static_cast<int>(rng() % 256);
-          d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
-        }
         frame.uv.push_back(uv);
-        frame.descriptors.push_back(d);
+        frame.descriptors.push_back(flipBits(kf.descriptors[i], 8, rng));
       }
     }
     for (int i = 0; i < distractors; ++i) {
@@ -168,13 +159,8 @@ TEST_F(Relocalization, FindsThePoseWhenMostMatchesAreWrong)
     if (!isRight) {
       uv = Eigen::Vector2d(u(rng), v(rng));
     }
-    OrbDescriptor d = kf.descriptors[i];
-    for (int f = 0; f < 8; ++f) {
-      const int b = static_cast<int>(rng() % 256);
-      d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
-    }
     frame.uv.push_back(uv);
-    frame.descriptors.push_back(d);
+    frame.descriptors.push_back(flipBits(kf.descriptors[i], 8, rng));
     right.push_back(isRight);
   }
   ASSERT_EQ(std::count(right.begin(), right.end(), true), 40);

@@ -2,6 +2,8 @@
 // synthetic scene, right points recovered, wrong matches and views without parallax give none.
 #include "tracking/WindowRelocalization.h"
 
+#include "HSlamTestDescriptors.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,14 +18,8 @@ using hslam::SE3d;
 
 const hslam::PinholeIntrinsics kK{500., 500., 319.5, 239.5};
 
-OrbDescriptor randomDescriptor(std::mt19937_64 &rng)
-{
-  OrbDescriptor d;
-  for (auto &w : d.words) {
-    w = rng();
-  }
-  return d;
-}
+using hslam_test::flipBits;
+using hslam_test::randomDescriptor;
 
 //! cTw of a camera at \e centre looking along +z (world), turned by \e yawRad about y.
 SE3d cameraAt(const Eigen::Vector3d &centre, double yawRad)
@@ -49,14 +45,9 @@ DescribedView view(int id, const SE3d &cTw, const std::vector<Eigen::Vector3d> &
     if (cX.z() <= 0. || uv.x() < 0 || uv.y() < 0 || uv.x() >= 640 || uv.y() >= 480) {
       continue;
     }
-    OrbDescriptor d = descriptors[i];
-    for (int f = 0; f < 6; ++f) {
-      const int b = static_cast<int>(rng() % 256);
-      d.words[static_cast<std::size_t>(b >> 6)] ^= std::uint64_t(1) << (b & 63);
-    }
     out.uv.push_back(uv);
     out.scale.push_back(1.f);
-    out.descriptors.push_back(d);
+    out.descriptors.push_back(flipBits(descriptors[i], 6, rng));
   }
   return out;
 }
