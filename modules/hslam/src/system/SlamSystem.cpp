@@ -208,9 +208,11 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     // covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with a gain change of e^-1.4).
     // Right relocalisations after a 5-frame cover had 16-58 inliers; the former 20 (twice a tracked frame's) refused
     // four of five of them in slam mode with direct tracking (point budgets 480-520).
-    // The relocalisation's own matches confirm as well: the window's corners are few, and after a long cover the
-    // camera often sees them from too far away to match 15 (7-Scenes, frames 120-160 black: 4-8 corner inliers
-    // while 30-50 of the window's triangulated ORB points agreed with the aligned pose).
+    // A relocalisation on the window's triangulated points is confirmed by its own matches too: the window's corners
+    // are few, and after a long cover the camera often sees them from too far away to match 15 (7-Scenes, frames
+    // 120-160 black: 4-8 corner inliers while 30-50 of those matches agreed with the aligned pose). The alignment's
+    // own checks (residuals, outliers, brightness) must have passed, and it must have stayed within the matches'
+    // 2.4 px (chi2, 2 dof, 95 %) of them.
     const SE3d cMwAligned = newMref * wMref.inverse();
     const int confirmedByRelocalization =
         success ? countReprojectionInliers(cMwAligned, m_relocalizationEvidence, m_preprocessor.intrinsics(),
@@ -387,6 +389,9 @@ void SlamSystem::declareLost(bool discardSegment)
   // Keep the old segment (trajectory, keyframes) and chain the next one to the last known pose; a segment whose
   // initialisation proved wrong is discarded instead (DSO resets after a failed initialisation).
   synchronize();
+  if (m_windowRelocalization) {
+    m_windowRelocalization->clear(); // the window goes with the segment
+  }
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     // A global bundle adjustment still running on the closing segment is waited for and written back (its keyframes
@@ -434,6 +439,9 @@ void SlamSystem::declareLost(bool discardSegment)
 void SlamSystem::reset()
 {
   synchronize();
+  if (m_windowRelocalization) {
+    m_windowRelocalization->clear(); // keyframe ids start again: features kept by id would belong to other images
+  }
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     m_mapper->reset(); // the global map too: a reset system starts from nothing (keyframe ids start again at 0)

@@ -54,6 +54,11 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
     RelocalizerOptions windowOptions = WindowRelocalization::matchingOptions();
     windowOptions.minInliers = options.minInliers;
     r = relocalize(described, {&window}, m_preprocessor.intrinsics(), windowOptions);
+    if (r.success) {
+      // Only these matches may confirm the alignment later (SlamSystem::trackInitialized): the window's corners
+      // are too few after a long cover. A bag-of-words relocalisation stays confirmed by the corners alone.
+      m_relocalizationEvidence = r.inlierObservations;
+    }
     VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": window relocalisation " << (r.success ? "found" : "no")
                                              << " pose, " << window.wX.size() << " triangulated points, "
                                              << described.uv.size() << " keypoints, " << r.matches << " matches, "
@@ -63,7 +68,6 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
   if (!r.success) {
     return false;
   }
-  m_relocalizationEvidence = r.inlierObservations;
   // The joint optimisation against the current tracking reference refines (and checks) the pose.
   const SE3d wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
   history.valid = true;

@@ -172,26 +172,32 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     }
     const SE3d cTwPnP(Eigen::Quaterniond(rotation),
                       Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
-    // Refined on the RANSAC inliers first (ORB-SLAM2 too): with loose matching most matches are wrong, and a robust
-    // optimisation over all of them is pulled away from the PnP pose (measured on 7-Scenes after a 40-frame cover:
-    // 20-41 RANSAC inliers of about 210 matches, 0 left after refining on all). From that pose every match is
-    // classified again, and those that agree with it are refined together.
-    std::vector<ReprojectionObservation> consensus;
-    consensus.reserve(ransacInliers.size());
-    for (int i : ransacInliers) {
-      if (i >= 0 && static_cast<std::size_t>(i) < observations.size()) {
-        consensus.push_back(observations[static_cast<std::size_t>(i)]);
+    // With refineOnConsensus, refined on the RANSAC inliers first (ORB-SLAM2 too): with loose matching most matches
+    // are wrong, and a robust optimisation over all of them is pulled away from the PnP pose (measured on 7-Scenes
+    // after a 40-frame cover: 20-41 RANSAC inliers of about 210 matches, 0 left after refining on all). From that
+    // pose every match is classified again, and those that agree with it are refined together.
+    std::vector<ReprojectionObservation> refinedOn;
+    SE3d cTwStart = cTwPnP;
+    if (options.refineOnConsensus) {
+      std::vector<ReprojectionObservation> consensus;
+      consensus.reserve(ransacInliers.size());
+      for (int i : ransacInliers) {
+        if (i >= 0 && static_cast<std::size_t>(i) < observations.size()) {
+          consensus.push_back(observations[static_cast<std::size_t>(i)]);
+        }
       }
-    }
-    const PoseOnlyResult first = optimizePoseOnly(cTwPnP, consensus, K, options.refinement);
-    std::vector<ReprojectionObservation> agreeing;
-    for (const ReprojectionObservation &obs : observations) {
-      if (countReprojectionInliers(first.cTw, {obs}, K, options.refinement.chi2Threshold, options.refinement.minDepth) >
-          0) {
-        agreeing.push_back(obs);
+      cTwStart = optimizePoseOnly(cTwPnP, consensus, K, options.refinement).cTw;
+      for (const ReprojectionObservation &obs : observations) {
+        Eigen::Vector2d r;
+        if (reprojectionResidual(cTwStart, obs, K, options.refinement.minDepth, r) &&
+            r.squaredNorm() <= options.refinement.chi2Threshold * obs.sigma2) {
+          refinedOn.push_back(obs);
+        }
       }
+    } else {
+      refinedOn = observations;
     }
-    const PoseOnlyResult refined = optimizePoseOnly(first.cTw, agreeing, K, options.refinement);
+    const PoseOnlyResult refined = optimizePoseOnly(cTwStart, refinedOn, K, options.refinement);
     result.inliers = std::max(result.inliers, refined.inliers);
     if (refined.inliers >= options.minInliers) {
       result.success = true;
@@ -199,9 +205,9 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
       result.cTw = refined.cTw;
       result.matches = static_cast<int>(matches.size());
       result.inliers = refined.inliers;
-      for (std::size_t i = 0; i < agreeing.size(); ++i) {
+      for (std::size_t i = 0; i < refinedOn.size() && i < refined.inlier.size(); ++i) {
         if (refined.inlier[i]) {
-          result.inlierObservations.push_back(agreeing[i]);
+          result.inlierObservations.push_back(refinedOn[i]);
         }
       }
       return result;

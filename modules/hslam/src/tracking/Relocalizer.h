@@ -46,11 +46,14 @@ struct RelocalizationFrame {
 
 //! Settings (defaults: ORB-SLAM2's relocalisation).
 struct RelocalizerOptions {
-  int maxDistance = 50;           //!< Hamming distance accepted at most in the BoW search (ORB-SLAM2 TH_LOW)
-  float ratio = 0.75f;            //!< best below ratio x second best (ORB-SLAM2: 0.75 in relocalisation)
-  int minMatches = 15;            //!< BoW matches needed to try PnP with a keyframe
-  int ransacIterations = 300;     //!< PnP RANSAC iterations
-  bool minimalP3P = false;        //!< AP3P hypotheses from 4 matches instead of EPnP's 5 (for low inlier ratios)
+  int maxDistance = 50;       //!< Hamming distance accepted at most in the BoW search (ORB-SLAM2 TH_LOW)
+  float ratio = 0.75f;        //!< best below ratio x second best (ORB-SLAM2: 0.75 in relocalisation)
+  int minMatches = 15;        //!< BoW matches needed to try PnP with a keyframe
+  int ransacIterations = 300; //!< PnP RANSAC iterations
+  bool minimalP3P = false;    //!< AP3P hypotheses from 4 matches instead of EPnP's 5 (for low inlier ratios)
+  //! Refine on the RANSAC consensus first, then on the matches that agree with that pose (for mostly wrong matches;
+  //! false: one robust refinement over all matches, from the PnP pose)
+  bool refineOnConsensus = false;
   double ransacThresholdPx = 2.5; //!< PnP inlier threshold, pixels (sqrt(5.991) at level 0)
   double ransacConfidence = 0.99; //!< PnP RANSAC confidence
   int minInliers = 50;            //!< inliers after refinement to accept (ORB-SLAM2: 50)

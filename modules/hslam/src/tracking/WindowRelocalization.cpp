@@ -138,22 +138,33 @@ WindowRelocalization::WindowRelocalization(const PinholeIntrinsics &K, const Win
 {
 }
 
-RelocalizationFrame WindowRelocalization::describe(const vpImage<unsigned char> &raw)
+void WindowRelocalization::extract(const vpImage<unsigned char> &raw, std::vector<Eigen::Vector2d> &uv,
+                                   std::vector<float> &scale, std::vector<OrbDescriptor> &descriptors)
 {
-  RelocalizationFrame frame;
+  uv.clear();
+  scale.clear();
+  descriptors.clear();
+  if (raw.getSize() == 0) {
+    return;
+  }
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat rows;
   m_extractor.extract(raw, keypoints, rows);
-  const std::vector<OrbDescriptor> descriptors = descriptorsFromMat(rows);
+  descriptors = descriptorsFromMat(rows);
   const std::size_t n = std::min(keypoints.size(), descriptors.size());
-  frame.uv.reserve(n);
-  frame.descriptors.reserve(n);
-  frame.scale.reserve(n);
+  descriptors.resize(n);
+  uv.reserve(n);
+  scale.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
-    frame.uv.emplace_back(keypoints[k].pt.x, keypoints[k].pt.y);
-    frame.descriptors.push_back(descriptors[k]);
-    frame.scale.push_back(std::pow(m_options.orb.scaleFactor, static_cast<float>(keypoints[k].octave)));
+    uv.emplace_back(keypoints[k].pt.x, keypoints[k].pt.y);
+    scale.push_back(std::pow(m_options.orb.scaleFactor, static_cast<float>(keypoints[k].octave)));
   }
+}
+
+RelocalizationFrame WindowRelocalization::describe(const vpImage<unsigned char> &raw)
+{
+  RelocalizationFrame frame;
+  extract(raw, frame.uv, frame.scale, frame.descriptors);
   return frame;
 }
 
@@ -162,20 +173,8 @@ DescribedView WindowRelocalization::describeView(const WindowView &view)
   DescribedView out;
   out.id = view.id;
   out.cMw = view.cMw;
-  if (!view.frame || view.frame->raw.getSize() == 0) {
-    return out;
-  }
-  std::vector<cv::KeyPoint> keypoints;
-  cv::Mat rows;
-  m_extractor.extract(view.frame->raw, keypoints, rows);
-  out.descriptors = descriptorsFromMat(rows);
-  const std::size_t n = std::min(keypoints.size(), out.descriptors.size());
-  out.descriptors.resize(n);
-  out.uv.reserve(n);
-  out.scale.reserve(n);
-  for (std::size_t k = 0; k < n; ++k) {
-    out.uv.emplace_back(keypoints[k].pt.x, keypoints[k].pt.y);
-    out.scale.push_back(std::pow(m_options.orb.scaleFactor, static_cast<float>(keypoints[k].octave)));
+  if (view.frame) {
+    extract(view.frame->raw, out.uv, out.scale, out.descriptors);
   }
   return out;
 }
@@ -194,6 +193,7 @@ RelocalizerOptions WindowRelocalization::matchingOptions()
   options.maxDistance = 64;
   options.minimalP3P = true;
   options.ransacIterations = 2000;
+  options.refineOnConsensus = true;
   return options;
 }
 

@@ -92,8 +92,10 @@ public:
   //! Scale-invariant ORB features of an image (the lost frame), in the form Relocalizer matches.
   RelocalizationFrame describe(const vpImage<unsigned char> &raw);
   /*!
-    The window's triangulated points as one relocalisation candidate (id: the newest keyframe's). Views are
-    described once and kept by id; a view whose pose changed is described again.
+    The window's triangulated points as one relocalisation candidate (id: the newest keyframe's). Each view is
+    paired with every other, widest baseline first, so a point seen by several views comes once per view with that
+    view's descriptor (a lost frame seen from nearer one of them matches that one). Views are described once and kept
+    by id (an image never changes); the points are triangulated again when a view's pose or the set of views changed.
   */
   RelocalizationKeyframe windowPoints(const std::vector<WindowView> &views);
   //! Forget the described views and points (tracking resumed: the window will move).
@@ -115,6 +117,9 @@ public:
 
 private:
   DescribedView describeView(const WindowView &view);
+  //! ORB features of an image: level-0 pixels, level scale factors and descriptors.
+  void extract(const vpImage<unsigned char> &raw, std::vector<Eigen::Vector2d> &uv, std::vector<float> &scale,
+               std::vector<OrbDescriptor> &descriptors);
 
   PinholeIntrinsics m_K;
   WindowRelocalizationOptions m_options;
