@@ -51,7 +51,12 @@ ResidualState evaluatePattern(const PhotometricSettings &settings, const Pyramid
   const double fxInv = 1. / K.fx;
   const double fyInv = 1. / K.fy;
   const Eigen::Vector3d &t = pair.t_th;
-  double sum = 0.;
+  // Two passes with the same arithmetic as one: first every pattern pixel is projected and its four interpolation
+  // pixels are prefetched, then they are read. The target images of a window (3.7 MB each at 640x480) do not stay
+  // in cache, and reading each pixel right after projecting it left the core waiting on one cache miss at a time
+  // (a quarter of a whole run on one load).
+  std::array<float, kPatternSize> up, vp;
+  std::array<double, kPatternSize> xn, yn, iz;
   for (int k = 0; k < kPatternSize; ++k) {
     const double uk = point.u + kPattern[k][0];
     const double vk = point.v + kPattern[k][1];
@@ -61,38 +66,45 @@ ResidualState evaluatePattern(const PhotometricSettings &settings, const Pyramid
     if (!(q.z() > 0.)) {
       return ResidualState::outOfBounds;
     }
-    const double iz = 1. / q.z();
-    const double xn = q.x() * iz;
-    const double yn = q.y() * iz;
-    const double up = K.fx * xn + K.cx;
-    const double vp = K.fy * yn + K.cy;
-    if (!target.isInside(static_cast<float>(up), static_cast<float>(vp), kProjectionMargin)) {
+    const size_t i = static_cast<size_t>(k);
+    iz[i] = 1. / q.z();
+    xn[i] = q.x() * iz[i];
+    yn[i] = q.y() * iz[i];
+    up[i] = static_cast<float>(K.fx * xn[i] + K.cx);
+    vp[i] = static_cast<float>(K.fy * yn[i] + K.cy);
+    if (!target.isInside(up[i], vp[i], kProjectionMargin)) {
       return ResidualState::outOfBounds;
     }
-    const Eigen::Vector3f hit = target.interpolate(static_cast<float>(up), static_cast<float>(vp));
+    target.prefetch(up[i], vp[i]);
+  }
+  double sum = 0.;
+  for (int k = 0; k < kPatternSize; ++k) {
+    const size_t i = static_cast<size_t>(k);
+    const Eigen::Vector3f hit = target.interpolate(up[i], vp[i]);
     const double r = static_cast<double>(hit[0]) - pair.b_th - pair.a_th * static_cast<double>(point.patch[k]);
     const double wGrad = static_cast<double>(point.weight[k]);
     sum += wGrad * huberEnergy(r, settings.huberThreshold);
     if (lin) {
       const double absR = std::fabs(r);
       const double wHuber = huberWeight(absR, settings.huberThreshold);
-      lin->r[static_cast<size_t>(k)] = r;
-      lin->weight[static_cast<size_t>(k)] = wGrad * wHuber;
+      lin->r[i] = r;
+      lin->weight[i] = wGrad * wHuber;
       const double gu = static_cast<double>(hit[1]) * K.fx; // dI/du * fx
       const double gv = static_cast<double>(hit[2]) * K.fy; // dI/dv * fy
-      const double rhoIz = rho * iz;
+      const double rhoIz = rho * iz[i];
+      const double x = xn[i], y = yn[i];
       // d(u, v)/d eps for p_t = q / rho under left perturbation: [I, -[p_t]x] then the pinhole projection.
       auto row = lin->J.row(k);
       row[0] = gu * rhoIz;
       row[1] = gv * rhoIz;
-      row[2] = -(gu * xn + gv * yn) * rhoIz;
-      row[3] = -gu * xn * yn - gv * (1. + yn * yn);
-      row[4] = gu * (1. + xn * xn) + gv * xn * yn;
-      row[5] = -gu * yn + gv * xn;
+      row[2] = -(gu * x + gv * y) * rhoIz;
+      row[3] = -gu * x * y - gv * (1. + y * y);
+      row[4] = gu * (1. + x * x) + gv * x * y;
+      row[5] = -gu * y + gv * x;
       row[6] = -pair.a_th * static_cast<double>(point.patch[k]);
       row[7] = -1.;
       // d(u, v)/d rho: q moves along t_th.
-      row[8] = (gu * (t.x() - xn * t.z()) + gv * (t.y() - yn * t.z())) * iz;
+      row[8] = (gu * (t.x() - x * t.z()) + gv * (t.y() - y * t.z())) * iz[i];
     }
   }
   if (lin) {

@@ -86,18 +86,26 @@ void linearizeRange(const WindowContext &ctx, std::vector<WindowPoint> &points, 
       // J^T W J and J^T W r over the 8 pattern pixels (9 columns: relative pose, alpha, beta, rho).
       // Plain loops over the upper triangle: Eigen sends this small product (or eight rank-1 updates) through its
       // general matrix kernels, which cost 4 % of a whole slam run.
+      // The weighted factors (w r and w J) are formed once, not once per product: the same products, so the same
+      // sums bit for bit.
       Mat9d H;
       Vec9d b;
+      double wr[kPatternSize];
+      for (int k = 0; k < kPatternSize; ++k) {
+        wr[k] = lin.weight[static_cast<size_t>(k)] * lin.r[static_cast<size_t>(k)];
+      }
       for (int c = 0; c < kRelativeDims; ++c) {
+        double wJ[kPatternSize];
         double bc = 0.;
         for (int k = 0; k < kPatternSize; ++k) {
-          bc += lin.weight[static_cast<size_t>(k)] * lin.r[static_cast<size_t>(k)] * lin.J(k, c);
+          wJ[k] = lin.weight[static_cast<size_t>(k)] * lin.J(k, c);
+          bc += wr[k] * lin.J(k, c);
         }
         b[c] = bc;
         for (int d = c; d < kRelativeDims; ++d) {
           double h = 0.;
           for (int k = 0; k < kPatternSize; ++k) {
-            h += lin.weight[static_cast<size_t>(k)] * lin.J(k, c) * lin.J(k, d);
+            h += wJ[k] * lin.J(k, d);
           }
           H(c, d) = h;
           H(d, c) = h;
