@@ -13,10 +13,12 @@
 #include <visp3/core/vpIoTools.h>
 
 #include <cstdio>
+#include <fcntl.h>
 #include <fstream>
 #include <functional>
 #include <memory>
 #include <string>
+#include <sys/file.h>
 #include <unistd.h>
 #include <vector>
 
@@ -74,6 +76,31 @@ inline std::string syntheticSequence(unsigned int width, unsigned int height, un
   }
   if (pathExists(dir + "/complete")) {
     return dir;
+  }
+  // Tests run in parallel processes (ctest -j): the first to get here renders, the others wait for it instead of
+  // rendering the same sequence beside it (the two loop tests did, which cost CI minutes on 2 cores). Without a lock
+  // file (read-only temporary directory) each renders, as before; the rename below stays the guard.
+  struct FileLock {
+    int fd;
+    explicit FileLock(const std::string &path) : fd(::open(path.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644))
+    {
+      if (fd >= 0 && ::flock(fd, LOCK_EX) != 0) {
+        ::close(fd);
+        fd = -1;
+      }
+    }
+    ~FileLock()
+    {
+      if (fd >= 0) {
+        ::flock(fd, LOCK_UN);
+        ::close(fd);
+      }
+    }
+    FileLock(const FileLock &) = delete;
+    FileLock &operator=(const FileLock &) = delete;
+  } lock(dir + ".lock");
+  if (pathExists(dir + "/complete")) {
+    return dir; // rendered by the process that held the lock
   }
   const std::string staging = dir + ".staging." + std::to_string(::getpid());
   vpHSlamSyntheticScene scene;
