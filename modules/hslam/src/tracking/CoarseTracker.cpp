@@ -267,7 +267,7 @@ void CoarseTracker::computeResiduals(int level, int begin, int end, float cutoff
   // Blocks of points: each block is projected and its interpolation pixels prefetched, then read (the same
   // arithmetic in the same order as one pass; reading right after projecting waited on one cache miss at a time).
   constexpr int kBlock = 16;
-  float blockU[kBlock], blockV[kBlock], blockKu[kBlock], blockKv[kBlock], blockIdepth[kBlock];
+  float blockKu[kBlock], blockKv[kBlock];
   bool blockInside[kBlock];
   for (int first = begin; first < end; first += kBlock) {
     const int last = std::min(end, first + kBlock);
@@ -301,12 +301,13 @@ void CoarseTracker::computeResiduals(int level, int begin, int end, float cutoff
         stats.shiftSamples += 2;
       }
 
+      // The warp's buffers are read by accumulate() only where the weight is set below.
       m_bufWeight[k] = 0.f;
-      blockU[b] = u;
-      blockV[b] = v;
+      m_bufIdepth[k] = newIdepth;
+      m_bufU[k] = u;
+      m_bufV[k] = v;
       blockKu[b] = Ku;
       blockKv[b] = Kv;
-      blockIdepth[b] = newIdepth;
       blockInside[b] = newIdepth > 0.f && target.isInside(Ku, Kv, kTargetBorder);
       if (blockInside[b]) {
         target.prefetch(Ku, Kv);
@@ -336,9 +337,6 @@ void CoarseTracker::computeResiduals(int level, int begin, int end, float cutoff
       }
       const float hw = huberWeight(absRes, huber);
       stats.energy += static_cast<double>(hw * residual * residual * (2.f - hw));
-      m_bufIdepth[k] = blockIdepth[b];
-      m_bufU[k] = blockU[b];
-      m_bufV[k] = blockV[b];
       m_bufDx[k] = hit[1];
       m_bufDy[k] = hit[2];
       m_bufResidual[k] = residual;
