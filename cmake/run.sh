@@ -24,8 +24,9 @@ jobs=${JOBS:-$(nproc)}
 
 # Debian packages the build, the tests and the demo need. Installed only when missing. clang, its sanitizer
 # runtimes (libclang-rt-dev, libFuzzer included) and LLVM's OpenMP (ViSP's flags ask for -fopenmp) serve the fuzz
-# targets of `test`; doxygen the documentation test, xvfb and xauth the live-window test (a virtual X server).
-packages=(g++ cmake make pkg-config libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
+# targets of `test`; ccache lets the sanitizer pass re-use the normal build's test programs; doxygen the
+# documentation test, xvfb and xauth the live-window test (a virtual X server).
+packages=(g++ cmake make pkg-config ccache libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
   libbenchmark-dev libv4l-dev libzip-dev zlib1g-dev visp-images-data clang libclang-rt-dev libomp-dev doxygen xvfb xauth)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
@@ -40,6 +41,15 @@ if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
     "${sudo_cmd[@]}" apt-get update -qq
     DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
   fi
+fi
+
+# ccache, when installed, for every build of this script (the normal one and the sanitizer and fuzz builds of
+# cmake/sanitizers.sh, through CMake's CMAKE_CXX_COMPILER_LAUNCHER environment variable). Its cache sits beside the
+# build folder; paths under the repository are hashed relative to the build folder, so that the AddressSanitizer
+# pass, which compiles the test programs with the normal build's flags, finds them cached.
+if command -v ccache >/dev/null 2>&1; then
+  export CMAKE_CXX_COMPILER_LAUNCHER=ccache CMAKE_C_COMPILER_LAUNCHER=ccache
+  export CCACHE_DIR=${CCACHE_DIR:-$build-ccache} CCACHE_BASEDIR=${CCACHE_BASEDIR:-$repo}
 fi
 
 echo "== configuring and building in $build"

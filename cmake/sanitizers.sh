@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Sanitizer passes of `bash cmake/run.sh test` (called by it after the normal suite; see README.md, "Reliability"):
-#   1. AddressSanitizer + UndefinedBehaviorSanitizer build in BUILD-asan, whole ctest suite without benchmarks;
+#   1. AddressSanitizer + UndefinedBehaviorSanitizer build in BUILD-asan, the ctest suite without benchmarks and
+#      without the longest system tests (listed below with the shorter tests that drive the same code);
 #   2. ThreadSanitizer build in BUILD-tsan of the programs that run threads, their threaded tests;
 #   3. libFuzzer build (clang) in BUILD-fuzz of the parser fuzz targets, a short run of each (HSLAM_FUZZ_RUNS inputs
 #      from a fixed seed).
@@ -22,11 +23,14 @@ configure() { # dir, cmake options...
   }
 }
 
-# --- AddressSanitizer + UndefinedBehaviorSanitizer: the whole suite -------------------------------------------------
+# --- AddressSanitizer + UndefinedBehaviorSanitizer: the suite -------------------------------------------------------
+# The library and the tutorials are instrumented; the test programs' own code is not (HSLAM_SANITIZE_TEST_PROGRAMS=OFF:
+# instrumenting GoogleTest's expansions cost as much build time as the library). Compiled with the normal build's
+# flags, the test programs come out of ccache when it is there (see cmake/run.sh).
 asan="$build-asan"
 echo "== AddressSanitizer + UBSan: building in $asan"
 start=$(date +%s)
-configure "$asan" -DHSLAM_SANITIZE=address,undefined
+configure "$asan" -DHSLAM_SANITIZE=address,undefined -DHSLAM_SANITIZE_TEST_PROGRAMS=OFF
 cmake --build "$asan" -j "$jobs"
 echo "== AddressSanitizer + UBSan: running the tests (built in $(($(date +%s) - start)) s)"
 start=$(date +%s)
@@ -39,12 +43,21 @@ export LSAN_OPTIONS=suppressions=$repo/cmake/sanitizers/lsan.supp
 export OPENCV_VIDEOIO_PRIORITY_GPHOTO2=0
 # package.consumer builds a separate project against the installed (instrumented) library: it needs the same flags.
 export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undefined"
-# The outward-loop accuracy test runs in the normal pass only, for time (305 s here): its trajectories are
-# bit-identical to the normal build's (loop closure solves with Eigen's sparse Cholesky, not CHOLMOD's OpenMP pool,
-# whose results differed between the two builds). The loop code still runs under this pass in the other loop and map
-# tests.
-ctest --test-dir "$asan" -LE benchmark -E 'SystemLoop\.OutwardLoopIsClosedAndBeatsOdometry' --output-on-failure \
-  -j "$jobs" --timeout "$timeout" --no-tests=error
+# Left out for time (instrumented, 1.5 to 9 minutes each on a 2 GHz core), each a longer run of code that a shorter
+# test of this pass already drives:
+#   SystemLoop.OutwardLoopIsClosedAndBeatsOdometry: its trajectories are bit-identical to the normal build's (loop
+#     closure solves with Eigen's sparse Cholesky, not CHOLMOD's OpenMP pool); the loop code runs in the other loop
+#     and map tests;
+#   SystemLoop.NoFalseLoopOnSequencesWithoutOne: detection and verification run in RealTimeLoopCorrection and loop.*;
+#   SystemReal.SevenScenes{CoveredLens,LongCover}*, SystemSynthetic.CoveredLensIsRelocalisedWithDirectTracking*,
+#     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
+#     InTheSameMap and RecoversFromLostTracking (the real-time one runs under ThreadSanitizer below);
+#   SystemMapFile.LocalizationOnlyTracksEveryFrame*: loading and localisation-only run in the two other map tests;
+#   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop.
+long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.SevenScenes(CoveredLens|LongCover)|'
+long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
+long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart'
+ctest --test-dir "$asan" -LE benchmark -E "$long" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== AddressSanitizer + UBSan: tests took $(($(date +%s) - start)) s"
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS OPENCV_VIDEOIO_PRIORITY_GPHOTO2 CXXFLAGS LDFLAGS
 
@@ -62,6 +75,9 @@ targets=(test_window_threads test_worker_pool test_system_synthetic test_system_
 # Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping);
 # the global bundle adjustment's own thread (started, replaced, cancelled).
 threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals|BackgroundBundleAdjustment'
+# Left out for time: SystemMapFile.RealTimeSaveThenLocalizationOnly (340 s instrumented on a 2 GHz core): saveMap
+# waits for the mapping thread as synchronize() does in every real-time test here, and localisation-only leaves the
+# mapping thread idle; it runs in the AddressSanitizer pass.
 echo "== ThreadSanitizer: building ${targets[*]} in $tsan${no_aslr[*]:+ (under ${no_aslr[*]})}"
 start=$(date +%s)
 configure "$tsan" -DHSLAM_SANITIZE=thread
@@ -70,7 +86,7 @@ echo "== ThreadSanitizer: running the threaded tests (built in $(($(date +%s) - 
 start=$(date +%s)
 # OpenMP (the synthetic renderer) on one thread: libgomp is not instrumented, its own synchronisation is invisible.
 OMP_NUM_THREADS=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$repo/cmake/sanitizers/tsan.supp \
-  "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
+  "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" -E 'SystemMapFile\.RealTimeSaveThenLocalizationOnly' --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== ThreadSanitizer: tests took $(($(date +%s) - start)) s"
 
 # --- libFuzzer: every parser of outside input, a short run each (the long runs have the label "benchmark") ----------
