@@ -38,6 +38,10 @@ if(HSLAM_SANITIZE)
     # show as a false race report, which the pass would fail on.
     list(APPEND _hslam_flags -Wno-tsan)
   endif()
+  if("thread" IN_LIST _hslam_sanitizers AND NOT HSLAM_SANITIZE_TEST_PROGRAMS)
+    # A synchronisation in uninstrumented code (an atomic in a test program) is invisible to TSan: false reports.
+    message(FATAL_ERROR "HSLAM_SANITIZE=thread needs HSLAM_SANITIZE_TEST_PROGRAMS=ON: ThreadSanitizer must see all code")
+  endif()
   if("address" IN_LIST _hslam_sanitizers)
     # Eigen turns its "malloc is already 16-byte aligned" shortcut off under AddressSanitizer (__SANITIZE_ADDRESS__)
     # and over-allocates by 16 bytes instead: an Eigen object allocated by instrumented code and freed by code that is
