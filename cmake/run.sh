@@ -2,11 +2,13 @@
 # One entry point for a fresh Debian 12 machine (see README.md):
 #   bash cmake/run.sh demo   install what is missing, build, run the main job on data reachable by default
 #   bash cmake/run.sh test   install what is missing, build, run the test suite (benchmarks excluded), then the
-#                            same suite built with AddressSanitizer + UBSan ($BUILD_DIR-asan) and the threaded
-#                            tests built with ThreadSanitizer ($BUILD_DIR-tsan); any sanitizer report fails
+#                            suite (but its longest system tests) built with AddressSanitizer + UBSan
+#                            ($BUILD_DIR-asan), the threaded tests built with ThreadSanitizer ($BUILD_DIR-tsan)
+#                            and the fuzz targets ($BUILD_DIR-fuzz); any sanitizer report fails
 #   bash cmake/run.sh bench  install what is missing, build, run the benchmarks (ctest label "benchmark")
 # Environment: BUILD_DIR (default build), JOBS (default nproc), HSLAM_SKIP_INSTALL=1 to skip apt-get,
-# HSLAM_SANITIZERS=0 to skip the sanitizer passes of `test`.
+# HSLAM_SANITIZERS=0 to skip the sanitizer passes of `test`, CCACHE_DIR (default $BUILD_DIR-ccache) when ccache is
+# installed.
 set -euo pipefail
 
 cmd=${1:-}

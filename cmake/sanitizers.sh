@@ -78,6 +78,7 @@ threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|Terminat
 # Left out for time: SystemMapFile.RealTimeSaveThenLocalizationOnly (340 s instrumented on a 2 GHz core): saveMap
 # waits for the mapping thread as synchronize() does in every real-time test here, and localisation-only leaves the
 # mapping thread idle; it runs in the AddressSanitizer pass.
+long_threaded='SystemMapFile\.RealTimeSaveThenLocalizationOnly'
 echo "== ThreadSanitizer: building ${targets[*]} in $tsan${no_aslr[*]:+ (under ${no_aslr[*]})}"
 start=$(date +%s)
 configure "$tsan" -DHSLAM_SANITIZE=thread
@@ -86,7 +87,8 @@ echo "== ThreadSanitizer: running the threaded tests (built in $(($(date +%s) - 
 start=$(date +%s)
 # OpenMP (the synthetic renderer) on one thread: libgomp is not instrumented, its own synchronisation is invisible.
 OMP_NUM_THREADS=1 TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=$repo/cmake/sanitizers/tsan.supp \
-  "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" -E 'SystemMapFile\.RealTimeSaveThenLocalizationOnly' --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
+  "${no_aslr[@]}" ctest --test-dir "$tsan" -R "$threaded" -E "$long_threaded" --output-on-failure -j "$jobs" \
+  --timeout "$timeout" --no-tests=error
 echo "== ThreadSanitizer: tests took $(($(date +%s) - start)) s"
 
 # --- libFuzzer: every parser of outside input, a short run each (the long runs have the label "benchmark") ----------
