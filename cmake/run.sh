@@ -48,10 +48,13 @@ fi
 # ccache, when installed, for every build of this script (the normal one and the sanitizer and fuzz builds of
 # cmake/sanitizers.sh, through CMake's CMAKE_CXX_COMPILER_LAUNCHER environment variable). Its cache sits beside the
 # build folder; paths under the repository are hashed relative to the build folder, so that the AddressSanitizer
-# pass, which compiles the test programs with the normal build's flags, finds them cached.
+# pass, which compiles the test programs with the normal build's flags, finds them cached. The module's files include
+# a precompiled header (HSLAM_PRECOMPILED_HEADERS): ccache caches them only with the sloppiness below (the header's
+# defines and the compiler's time macros are not hashed; the project uses no __DATE__ or __TIME__).
 if command -v ccache >/dev/null 2>&1; then
   export CMAKE_CXX_COMPILER_LAUNCHER=ccache CMAKE_C_COMPILER_LAUNCHER=ccache
   export CCACHE_DIR=${CCACHE_DIR:-$build-ccache} CCACHE_BASEDIR=${CCACHE_BASEDIR:-$repo}
+  export CCACHE_SLOPPINESS=${CCACHE_SLOPPINESS:-pch_defines,time_macros,include_file_mtime,include_file_ctime}
 fi
 
 echo "== configuring and building in $build"
