@@ -49,8 +49,8 @@ fi
 # cmake/sanitizers.sh, through CMake's CMAKE_CXX_COMPILER_LAUNCHER environment variable). Its cache sits beside the
 # build folder; paths under the repository are hashed relative to the build folder, so that the AddressSanitizer
 # pass, which compiles the test programs with the normal build's flags, finds them cached. The module's files include
-# a precompiled header (HSLAM_PRECOMPILED_HEADERS): ccache caches them only with the sloppiness below (the header's
-# defines and the compiler's time macros are not hashed; the project uses no __DATE__ or __TIME__).
+# a precompiled header (HSLAM_PRECOMPILED_HEADERS): ccache caches them only with the sloppiness below (it then hashes
+# the precompiled header's content, not its defines or time stamps; the project uses no __DATE__ or __TIME__).
 if command -v ccache >/dev/null 2>&1; then
   export CMAKE_CXX_COMPILER_LAUNCHER=ccache CMAKE_C_COMPILER_LAUNCHER=ccache
   export CCACHE_DIR=${CCACHE_DIR:-$build-ccache} CCACHE_BASEDIR=${CCACHE_BASEDIR:-$repo}

@@ -197,8 +197,8 @@ TEST(SystemSynthetic, RealTimeHybridCoveredLensKeepsTracking)
 {
   // The same covered lens in real-time mode (mapping thread; relocalisation waits for it): run under
   // ThreadSanitizer in CI. The outcome depends on scheduling, so only what must always hold is checked: every
-  // frame processed, tracking at the end, at most one new segment, counters consistent. The run stops 30 frames
-  // after the images return: the rest of the sequence adds nothing here and costs minutes under ThreadSanitizer.
+  // frame processed, tracking at the end, at most one new segment, counters consistent. The run stops at frame
+  // 70, 30 frames after the images return: the rest adds nothing here and costs minutes under ThreadSanitizer.
   HSLAM_REQUIRE_SYNTHETIC(dir);
   constexpr unsigned int kLastFrame = 70;
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(dir);
