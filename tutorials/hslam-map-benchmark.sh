@@ -16,7 +16,9 @@
 #           loops detected (sum over the runs: these sequences have none)
 #   loop    the synthetic room filmed wall after wall (--look-outward), LOOP_LAPS laps of 400 frames, 320x240 with
 #           the effects below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same runs and
-#           medians as "real", plus loops detected / corrected and the longest correction
+#           medians as "real", plus loops detected / corrected, the longest correction and lap_rpe: the translation
+#           RPE over one lap (400 frames), i.e. how far the estimate at a place is from the estimate one lap earlier
+#           at the same place (after the Sim(3) scale): 0 when the later laps are registered onto the first
 #   laps    synthetic room (tutorial-hslam-synthetic, LAP_FRAMES frames a lap, LAPS laps, 320x240, noise, motion
 #           blur, exposure changes, vignette, response) per tracking and map mode: ATE, the drift between start and
 #           end of the run (TUM monoVO alignment error with 3 s segments: the loop ends where it started), mapping ms,
@@ -127,8 +129,8 @@ if has_section loop; then
         > "$out/synthetic-outward-$loop_laps.log" 2>&1 && touch "$seq/complete" ||
         echo "outward loop: generation failed, see $out/synthetic-outward-$loop_laps.log"
     fi
-    printf "%-7s %-9s %9s %10s %8s %12s %7s %7s %10s   %s\n" track map ate tracked map_ms loops/corr det_ms \
-      max_ver max_corr_ms runs
+    printf "%-7s %-9s %9s %8s %10s %8s %12s %7s %7s %10s   %s\n" track map ate lap_rpe tracked map_ms loops/corr \
+      det_ms max_ver max_corr_ms runs
     for track in $tracking_modes; do
       for mode in $map_modes; do
         run_budgets "$out/outward$loop_laps.$track.$mode" "$seq" "$track" "$mode"
@@ -136,18 +138,24 @@ if has_section loop; then
         maps=()
         tracks=()
         detections=()
+        lap_rpes=()
         worst=0
         verification=0
         for p in "${prefixes[@]}"; do
           maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
+          # One lap is 400 frames at the generator's 30 Hz: the ground truth repeats itself after it.
+          lap_rpe="$("$evaluate" --groundtruth "$seq/groundtruth.txt" --estimate "$p.txt" --rpe-delta 13.3333 \
+            2> /dev/null | sed -n "s/^rpe_trans_rmse_m=//p")"
+          lap_rpes+=("${lap_rpe:-nan}")
           tracks+=("$(json "$p.json" tracked_frames)")
           detections+=("$(json "$p.json" loop_detection_ms_mean)")
           worst="$(awk -v a="$worst" -v b="$(json "$p.json" loop_correction_ms_max)" 'BEGIN { print (b > a ? b : a) }')"
           verification="$(awk -v a="$verification" -v b="$(json "$p.json" loop_verification_ms_max)" \
             'BEGIN { print (b > a ? b : a) }')"
         done
-        printf "%-7s %-9s %9.4f %10s %8.2f %12s %7.2f %7.1f %10.1f   %s\n" "$track" "$mode" \
-          "$(median "${ates[@]}")" "$(median "${tracks[@]}")/$loop_frames" "$(median "${maps[@]}")" \
+        printf "%-7s %-9s %9.4f %8.4f %10s %8.2f %12s %7.2f %7.1f %10.1f   %s\n" "$track" "$mode" \
+          "$(median "${ates[@]}")" "$(median "${lap_rpes[@]}")" "$(median "${tracks[@]}")/$loop_frames" \
+          "$(median "${maps[@]}")" \
           "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" \
           "$(median "${detections[@]}")" "$verification" "$worst" "${ates[*]}"
       done
