@@ -239,7 +239,9 @@ echo "(ATE and drift in ground-truth units: metres, Tsukuba centimetres; map_ms:
 echo " global points re-activated / fused per keyframe; share: of the window's active points, from the global map;"
 echo " culled: share of the marginalised keyframes culled; kb_kf: memory per marginalised keyframe; loops/corr: loops"
 echo " detected / corrected summed over the runs; det_ms: loop detection ms per keyframe (median of the runs);"
-echo " max_ver: longest Sim(3) verification of a candidate, ms; max_corr_ms: longest loop correction; files in $out)"
+echo " max_ver: longest Sim(3) verification of a candidate, ms; max_corr_ms: longest loop correction; lap_rpe:"
+echo " translation RPE over one lap of the outward loop, metres (0: later laps registered onto the first); files in"
+echo " $out)"
 if [[ $failures -gt 0 ]]; then
   echo "$failures run(s) failed"
   exit 1
