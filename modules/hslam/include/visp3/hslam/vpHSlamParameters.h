@@ -120,7 +120,7 @@ public:
 
   //! Monocular initialisation (two-view from feature matches, then photometric refinement).
   struct Initializer {
-    int minMatches = 80;             //!< ORB matches needed to attempt a two-view solution
+    int minMatches = 50;             //!< ORB matches needed to attempt a two-view solution
     double minParallaxDeg = 1.0;     //!< median triangulation angle required, degrees
     double ransacThresholdPx = 1.0;  //!< RANSAC inlier threshold on the epipolar / homography error, pixels
     double ransacConfidence = 0.999; //!< RANSAC confidence
