@@ -119,12 +119,12 @@ if has_section loop; then
   synthetic="$build/tutorials/tutorial-hslam-synthetic"
   # One lap of the generator's loop: 400 frames at its 30 Hz (the ground truth repeats itself after it).
   loop_lap_frames=400
-  lap_seconds=$(awk -v n="$loop_lap_frames" 'BEGIN { printf "%.4f", n / 30 }')
+  loop_lap_seconds=$(awk -v n="$loop_lap_frames" 'BEGIN { printf "%.4f", n / 30 }')
   for loop_laps in $loop_laps_list; do
     loop_frames=$((loop_laps * loop_lap_frames + 1))
     seq="$out/synthetic-outward-${loop_laps}laps"
-    echo "== loop: the room filmed wall after wall, $loop_laps laps of $loop_lap_frames frames (320x240, noise 4, blur, exposure,"
-    echo "   vignette, response); median of ${#budget_list[@]} runs (point budgets $budgets)"
+    echo "== loop: the room filmed wall after wall, $loop_laps laps of $loop_lap_frames frames (320x240, noise 4, blur,"
+    echo "   exposure, vignette, response); median of ${#budget_list[@]} runs (point budgets $budgets)"
     if [[ ! -f "$seq/complete" ]]; then
       rm -rf "$seq"
       "$synthetic" --output "$seq" --frames "$loop_frames" --laps "$loop_laps" --look-outward --width 320 \
@@ -146,7 +146,7 @@ if has_section loop; then
         verification=0
         for p in "${prefixes[@]}"; do
           maps+=("$(json "$p.json" mapping_ms_per_keyframe_median)")
-          lap_rpe="$("$evaluate" --groundtruth "$seq/groundtruth.txt" --estimate "$p.txt" --rpe-delta "$lap_seconds" \
+          lap_rpe="$("$evaluate" --groundtruth "$seq/groundtruth.txt" --estimate "$p.txt" --rpe-delta "$loop_lap_seconds" \
             2> /dev/null | sed -n "s/^rpe_trans_rmse_m=//p")"
           lap_rpes+=("${lap_rpe:-nan}")
           tracks+=("$(json "$p.json" tracked_frames)")
