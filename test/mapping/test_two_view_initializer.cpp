@@ -1,7 +1,9 @@
 // Two-view monocular initializer: exact synthetic scene, real sequences (7-Scenes, Tsukuba CG, KITTI 06) against
-// their ground truth, degenerate inputs (static camera, pure rotation), and the sparse inverse-depth interpolator.
+// their ground truth, degenerate inputs (static camera, pure rotation), the sub-pixel match refinement and the sparse
+// inverse-depth interpolator.
 #include "HSlamTestData.h"
 
+#include "mapping/MatchRefinement.h"
 #include "mapping/SparseIdepthInterpolator.h"
 #include "mapping/TwoViewGeometry.h"
 #include "mapping/TwoViewInitializer.h"
@@ -494,6 +496,59 @@ TEST(TwoViewInitializer, PureRotationNeverInitialises)
   }
   std::printf("[rotation] %d of 16 rotated views moved the matches and were rejected\n", attempted);
   EXPECT_EQ(attempted, 16);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Sub-pixel match refinement (Lucas-Kanade).
+
+namespace
+{
+//! A smooth textured image, the pattern moved by (shiftU, shiftV): pixel (u, v) shows the pattern at
+//! (u - shiftU, v - shiftV).
+vpImage<unsigned char> shiftedPattern(double shiftU, double shiftV)
+{
+  vpImage<unsigned char> I(120, 160);
+  for (unsigned int v = 0; v < I.getHeight(); ++v) {
+    for (unsigned int u = 0; u < I.getWidth(); ++u) {
+      const double x = u - shiftU, y = v - shiftV;
+      const double f = 128. + 60. * std::sin(0.31 * x + 0.11 * y) + 50. * std::cos(0.17 * y - 0.23 * x);
+      I[v][u] = static_cast<unsigned char>(std::lround(std::min(255., std::max(0., f))));
+    }
+  }
+  return I;
+}
+} // namespace
+
+TEST(MatchRefinement, RecoversASubPixelShiftAndATemplateServesEveryFrame)
+{
+  const vpImage<unsigned char> I1 = shiftedPattern(0., 0.);
+  const std::vector<std::pair<double, double>> shifts = {{1.3, -0.7}, {-2.4, 0.45}, {0.2, 2.9}};
+  LucasKanadeTemplate t;
+  ASSERT_TRUE(makeLucasKanadeTemplate(I1, 60.5, 50.25, t));
+  for (const auto &s : shifts) {
+    const vpImage<unsigned char> I2 = shiftedPattern(s.first, s.second);
+    // Started from the integer pixel nearest the truth, as a matched keypoint would be.
+    double u = std::round(60.5 + s.first), v = std::round(50.25 + s.second);
+    double uOnce = u, vOnce = v;
+    ASSERT_TRUE(refineMatchLucasKanade(t, I2, u, v, 3.));
+    EXPECT_NEAR(u, 60.5 + s.first, 0.05);
+    EXPECT_NEAR(v, 50.25 + s.second, 0.05);
+    // The kept template gives exactly what a template made for this frame gives.
+    ASSERT_TRUE(refineMatchLucasKanade(I1, 60.5, 50.25, I2, uOnce, vOnce, 3.));
+    EXPECT_EQ(u, uOnce);
+    EXPECT_EQ(v, vOnce);
+  }
+  // A flat patch has no template; a patch over the border neither.
+  const vpImage<unsigned char> flat(120, 160, 90);
+  EXPECT_FALSE(makeLucasKanadeTemplate(flat, 60., 50., t));
+  EXPECT_FALSE(makeLucasKanadeTemplate(I1, 3., 50., t));
+  // Too far a move is refused and leaves the position as it was.
+  const vpImage<unsigned char> far = shiftedPattern(2.6, 0.);
+  ASSERT_TRUE(makeLucasKanadeTemplate(I1, 60.5, 50.25, t));
+  double u = 60.5, v = 50.25;
+  EXPECT_FALSE(refineMatchLucasKanade(t, far, u, v, 1.));
+  EXPECT_EQ(u, 60.5);
+  EXPECT_EQ(v, 50.25);
 }
 
 // ---------------------------------------------------------------------------------------------------------------

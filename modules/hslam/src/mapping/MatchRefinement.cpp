@@ -10,10 +10,8 @@ namespace hslam
 {
 namespace
 {
-//! Patch half size: an 11x11 window, the usual KLT size for 640-px images.
-constexpr int kHalfPatch = 5;
-constexpr int kPatchSide = 2 * kHalfPatch + 1;
-constexpr int kPatchPixels = kPatchSide * kPatchSide;
+constexpr int kHalfPatch = LucasKanadeTemplate::kHalfPatch;
+constexpr int kPatchPixels = LucasKanadeTemplate::kPixels;
 constexpr int kMaxIterations = 10;
 //! Stop when the update is below this, pixels.
 constexpr double kConvergedStepPx = 0.01;
@@ -39,33 +37,46 @@ bool patchInside(const vpImage<unsigned char> &I, double u, double v)
 }
 } // namespace
 
-bool refineMatchLucasKanade(const vpImage<unsigned char> &I1, double u1, double v1, const vpImage<unsigned char> &I2,
-                            double &u2, double &v2, double maxShiftPx)
+bool makeLucasKanadeTemplate(const vpImage<unsigned char> &I1, double u1, double v1, LucasKanadeTemplate &t)
 {
-  if (!patchInside(I1, u1, v1) || !patchInside(I2, u2, v2)) {
+  if (!patchInside(I1, u1, v1)) {
     return false;
   }
-  // Template and its gradients (inverse compositional: the Hessian is computed once).
-  std::array<double, kPatchPixels> T, gx, gy;
-  double meanT = 0., h00 = 0., h01 = 0., h11 = 0.;
+  // Inverse compositional: the template's gradients and Hessian are computed once.
+  t.meanT = t.h00 = t.h01 = t.h11 = 0.;
   int k = 0;
   for (int dy = -kHalfPatch; dy <= kHalfPatch; ++dy) {
     for (int dx = -kHalfPatch; dx <= kHalfPatch; ++dx, ++k) {
       const double u = u1 + dx, v = v1 + dy;
-      T[k] = bilinear(I1, u, v);
-      gx[k] = 0.5 * (bilinear(I1, u + 1., v) - bilinear(I1, u - 1., v));
-      gy[k] = 0.5 * (bilinear(I1, u, v + 1.) - bilinear(I1, u, v - 1.));
-      meanT += T[k];
-      h00 += gx[k] * gx[k];
-      h01 += gx[k] * gy[k];
-      h11 += gy[k] * gy[k];
+      t.T[k] = bilinear(I1, u, v);
+      t.gx[k] = 0.5 * (bilinear(I1, u + 1., v) - bilinear(I1, u - 1., v));
+      t.gy[k] = 0.5 * (bilinear(I1, u, v + 1.) - bilinear(I1, u, v - 1.));
+      t.meanT += t.T[k];
+      t.h00 += t.gx[k] * t.gx[k];
+      t.h01 += t.gx[k] * t.gy[k];
+      t.h11 += t.gy[k] * t.gy[k];
     }
   }
-  meanT /= kPatchPixels;
-  const double det = h00 * h11 - h01 * h01;
-  if (det < kMinStructureDetPerPixelSq * kPatchPixels * kPatchPixels) {
+  t.meanT /= kPatchPixels;
+  t.det = t.h00 * t.h11 - t.h01 * t.h01;
+  return t.det >= kMinStructureDetPerPixelSq * kPatchPixels * kPatchPixels;
+}
+
+bool refineMatchLucasKanade(const vpImage<unsigned char> &I1, double u1, double v1, const vpImage<unsigned char> &I2,
+                            double &u2, double &v2, double maxShiftPx)
+{
+  LucasKanadeTemplate t;
+  return makeLucasKanadeTemplate(I1, u1, v1, t) && refineMatchLucasKanade(t, I2, u2, v2, maxShiftPx);
+}
+
+bool refineMatchLucasKanade(const LucasKanadeTemplate &t, const vpImage<unsigned char> &I2, double &u2, double &v2,
+                            double maxShiftPx)
+{
+  if (!patchInside(I2, u2, v2)) {
     return false;
   }
+  const std::array<double, kPatchPixels> &T = t.T, &gx = t.gx, &gy = t.gy;
+  const double meanT = t.meanT, h00 = t.h00, h01 = t.h01, h11 = t.h11, det = t.det;
   const double u2Start = u2, v2Start = v2;
   double u = u2, v = v2, residualSq = 0.;
   bool converged = false;
@@ -75,7 +86,7 @@ bool refineMatchLucasKanade(const vpImage<unsigned char> &I1, double u1, double 
     }
     std::array<double, kPatchPixels> I;
     double meanI = 0.;
-    k = 0;
+    int k = 0;
     for (int dy = -kHalfPatch; dy <= kHalfPatch; ++dy) {
       for (int dx = -kHalfPatch; dx <= kHalfPatch; ++dx, ++k) {
         I[k] = bilinear(I2, u + dx, v + dy);

@@ -3,7 +3,6 @@
  */
 #include "mapping/TwoViewInitializer.h"
 
-#include "mapping/MatchRefinement.h"
 #include "mapping/TwoViewGeometry.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -141,6 +140,7 @@ void TwoViewInitializer::reset()
   m_firstKeypoints.clear();
   m_firstDescriptors.release();
   m_firstImage = vpImage<unsigned char>();
+  forgetTemplates();
   m_result = TwoViewInitialization();
   m_lastAttempt = TwoViewAttempt();
 }
@@ -201,6 +201,7 @@ TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned ch
     m_firstKeypoints.swap(keypoints);
     m_firstDescriptors = descriptors;
     m_firstImage = I;
+    forgetTemplates();
     m_firstId = frameId;
     m_framesSinceFirst = 0;
   }
@@ -245,14 +246,34 @@ void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints
     }
     const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(j)].pt;
     const cv::Point2f &b = keypoints[static_cast<size_t>(i)].pt;
-    matches.push_back({cv::Point2d(a.x, a.y), cv::Point2d(b.x, b.y)});
+    Match m;
+    m.p1 = cv::Point2d(a.x, a.y);
+    m.p2 = cv::Point2d(b.x, b.y);
+    m.firstIndex = j;
+    matches.push_back(m);
   }
 }
 
-void TwoViewInitializer::refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches) const
+void TwoViewInitializer::forgetTemplates()
 {
+  // Released, not only emptied: about 3 KB per keypoint, 3 MB for 1000, of no use once the map has started.
+  std::vector<LucasKanadeTemplate>().swap(m_templates);
+  std::vector<signed char>().swap(m_templateState);
+}
+
+void TwoViewInitializer::refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches)
+{
+  if (m_templateState.size() != m_firstKeypoints.size()) {
+    m_templates.assign(m_firstKeypoints.size(), LucasKanadeTemplate());
+    m_templateState.assign(m_firstKeypoints.size(), 0);
+  }
   for (Match &m : matches) {
-    m.refined = refineMatchLucasKanade(m_firstImage, m.p1.x, m.p1.y, I, m.p2.x, m.p2.y, kMaxRefinementShiftPx);
+    const size_t j = static_cast<size_t>(m.firstIndex);
+    if (m_templateState[j] == 0) {
+      m_templateState[j] = makeLucasKanadeTemplate(m_firstImage, m.p1.x, m.p1.y, m_templates[j]) ? 1 : -1;
+    }
+    m.refined =
+        m_templateState[j] > 0 && refineMatchLucasKanade(m_templates[j], I, m.p2.x, m.p2.y, kMaxRefinementShiftPx);
   }
 }
 

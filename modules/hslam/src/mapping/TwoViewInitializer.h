@@ -45,6 +45,7 @@
 #include "features/ImagePyramid.h"
 #include "features/OrbExtractor.h"
 #include "map/Frame.h"
+#include "mapping/MatchRefinement.h"
 #include "math/SE3.h"
 
 #include <visp3/core/vpConfig.h>
@@ -149,11 +150,14 @@ public:
 private:
   struct Match {
     cv::Point2d p1, p2;
+    int firstIndex = -1; //!< keypoint index in the first frame
     bool refined = false;
   };
   void matchToFirst(const std::vector<cv::KeyPoint> &keypoints, const cv::Mat &descriptors,
                     std::vector<Match> &matches) const;
-  void refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches) const;
+  void refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches);
+  //! A new first frame: its keypoints' refinement templates are made again, when first needed.
+  void forgetTemplates();
   TwoViewAttempt::Outcome solve(const std::vector<Match> &matches, TwoViewAttempt &attempt);
 
   vpHSlamParameters::Initializer m_params;
@@ -166,6 +170,10 @@ private:
   vpImage<unsigned char> m_firstImage;
   std::vector<cv::KeyPoint> m_firstKeypoints;
   cv::Mat m_firstDescriptors;
+  //! Per first-frame keypoint: its Lucas-Kanade template, made at its first match and kept for later frames (the
+  //! same keypoints are refined against every frame); state 0 = not made yet, 1 = usable, -1 = unusable.
+  std::vector<LucasKanadeTemplate> m_templates;
+  std::vector<signed char> m_templateState;
   TwoViewInitialization m_result;
   TwoViewAttempt m_lastAttempt;
 };
