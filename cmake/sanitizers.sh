@@ -53,10 +53,13 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
 #     InTheSameMap and RecoversFromLostTracking (the real-time one runs under ThreadSanitizer below);
 #   SystemMapFile.LocalizationOnlyTracksEveryFrame*: loading and localisation-only run in the two other map tests;
-#   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop.
+#   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
+#   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
+#     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking.
 long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.SevenScenes(CoveredLens|LongCover)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
-long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart'
+long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
+long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding'
 ctest --test-dir "$asan" -LE benchmark -E "$long" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== AddressSanitizer + UBSan: tests took $(($(date +%s) - start)) s"
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS OPENCV_VIDEOIO_PRIORITY_GPHOTO2 CXXFLAGS LDFLAGS

@@ -96,3 +96,109 @@ TEST(SystemGlobalMap, SecondLapReusesLeanStoredKeyframes)
   EXPECT_EQ(strict.run.statistics.globalPoints, 0u);
   EXPECT_TRUE(strict.edges.empty());
 }
+
+namespace
+{
+struct TurnRun {
+  hslam_test::SystemRun run;
+  vpHSlamTrajectory groundTruth; //!< every frame fed, the turn's included
+};
+
+//! Frames of the second lap fed after the turn (the run stops there).
+constexpr unsigned int kFramesAfterTurn = 60;
+
+/*!
+  The synthetic room's two laps (fast enough for the test: 200 frames a lap) with a half turn in place in the second:
+  after frame \e turnAt the camera turns 180 degrees about its vertical axis and back, 3 degrees a frame, then goes
+  on with the lap for kFramesAfterTurn frames. Keyframes made while turning triangulate nothing, and the window
+  empties.
+*/
+TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt)
+{
+  vpHSlamSyntheticScene scene;
+  scene.setLaps(kLaps);
+  scene.configure(kWidth, kHeight, kFrames, 30., 3);
+  vpHSlam slam(hslam_test::syntheticCamera(scene), params);
+  TurnRun r;
+  vpImage<unsigned char> I;
+  const double dt = 1. / scene.getFrameRate();
+  double t = 0.;
+  auto feed = [&](const vpHomogeneousMatrix &wMc) {
+    r.run.states.push_back(slam.track(I, t));
+    r.groundTruth.add(t, wMc);
+    t += dt;
+  };
+  for (unsigned int i = 0; i <= turnAt + kFramesAfterTurn && i < scene.getFrameCount(); ++i) {
+    scene.render(i, I);
+    feed(scene.getPose(i));
+    if (i != turnAt) {
+      continue;
+    }
+    const vpHomogeneousMatrix wMc = scene.getPose(i);
+    constexpr double kStepDeg = 3., kTurnDeg = 180.;
+    const int steps = static_cast<int>(kTurnDeg / kStepDeg);
+    for (int j = 1; j <= 2 * steps; ++j) {
+      const double angle = vpMath::rad(kStepDeg * (j <= steps ? j : 2 * steps - j));
+      const vpHomogeneousMatrix turned = wMc * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.);
+      scene.renderAtPose(turned, I, 1000u + static_cast<unsigned int>(j));
+      feed(turned);
+    }
+  }
+  r.run.trajectory = slam.getTrajectory();
+  r.run.statistics = slam.getStatistics();
+  return r;
+}
+
+vpHSlamParameters turnParameters(bool seed)
+{
+  vpHSlamParameters params;
+  params.system.deterministic = true;
+  params.tracking.seedFromStoredMap = seed;
+  return params;
+}
+
+void printTurnRun(const char *what, const TurnRun &r, double ate)
+{
+  const vpHSlam::Statistics &s = r.run.statistics;
+  std::cout << "half turn in place in the second lap, " << what << ": " << s.trackedFrames << " tracked, "
+            << s.lostFrames << " lost, " << s.segments << " segment(s), " << s.relocalizationsSucceeded
+            << " relocalisation(s), ATE " << ate << " m" << std::endl;
+}
+} // namespace
+
+TEST(SystemGlobalMap, TurnInPlaceIsSeededAgainFromTheStoredMap)
+{
+  // Bag-of-words + PnP finds the camera in the first lap's stored keyframes after the turn, but no window point is
+  // left to confirm it against: without seeding, the camera stays lost until a new segment starts (next test).
+  // Seeding the window from the stored map keeps the one map.
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  const vpHSlamParameters params = turnParameters(true);
+  ASSERT_EQ(params.system.mode, vpHSlamParameters::modeSlam); // the defaults
+  ASSERT_EQ(params.tracking.seedFromStoredMap, vpHSlamParameters().tracking.seedFromStoredMap);
+  const TurnRun seeded = runWithTurn(params, kFramesPerLap + 60);
+  const vpHSlam::Statistics &s = seeded.run.statistics;
+  const double ate = hslam_test::simAte(seeded.groundTruth, seeded.run.trajectory);
+  printTurnRun("seeded from the stored map", seeded, ate);
+  // One map, back within a few frames (2 measured: the first fix, then the one that agrees with it).
+  EXPECT_EQ(s.segments, 1u);
+  EXPECT_GE(s.relocalizationsSucceeded, 1u);
+  EXPECT_LE(s.lostFrames, 5u);
+  // Every frame fed, the turn's included, Sim(3)-aligned: 0.070 m measured, 0.116 m without seeding (the next
+  // test's run). Where the 0.07 m comes from is not analysed yet.
+  EXPECT_LT(ate, 0.1);
+}
+
+TEST(SystemGlobalMap, TurnInPlaceWithoutSeedingStartsANewSegment)
+{
+  // The previous test's scenario holds: without seeding the camera is lost for the relocalisation timeout.
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  const TurnRun unseeded = runWithTurn(turnParameters(false), kFramesPerLap + 60);
+  const vpHSlam::Statistics &u = unseeded.run.statistics;
+  printTurnRun("not seeded", unseeded, hslam_test::simAte(unseeded.groundTruth, unseeded.run.trajectory));
+  EXPECT_GT(u.lostFrames, 20u);
+  EXPECT_EQ(u.segments, 2u);
+}

@@ -156,6 +156,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(tracking, relocalizationMinInliers, atLeast(6), "PnP inliers needed to accept a relocalisation"),
   HSLAM_PARAM(tracking, relocalizationCheckInliers, atLeast(6), "ORB inliers confirming a relocalised pose"),
   HSLAM_PARAM(tracking, relocalizeInWindow, anyValue(), "also relocalise on ORB points triangulated in the window"),
+  HSLAM_PARAM(tracking, seedFromStoredMap, anyValue(), "an emptied window is seeded again from the stored map"),
 
   HSLAM_PARAM(globalMap, covisibilityMinShared, atLeast(1), "points shared for a co-visibility edge"),
   HSLAM_PARAM(globalMap, cullObservedShare, between(0., 1.), "culling: share of points seen by enough others"),

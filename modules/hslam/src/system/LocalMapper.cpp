@@ -217,11 +217,20 @@ void LocalMapper::makeNonKeyframe(const FramePtr &frame)
   traceAll(*frame);
 }
 
-void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
+void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId, int seedKeyframe)
 {
   Impl &m = *m_impl;
   const double t0 = threadCpuMs();
   collectGlobalBundleAdjustment(false); // its keyframes' states go out with this keyframe's
+  if (seedKeyframe >= 0 && keepsGlobalMap()) {
+    // The window could not hold the camera: the keyframe starts it again from the stored map. The old keyframes
+    // leave first (into the global map): their few points, seen from a pose that drifted while they emptied,
+    // dragged the new keyframe's pose in the window optimisation (3-lap synthetic loop: 3 points moved it 0.5 map
+    // units away from where PnP had placed it, and no stored point matched there any more).
+    while (!m_window.empty()) {
+      marginalize(m_window.front()->id());
+    }
+  }
   traceAll(*frame);
   const double t1 = threadCpuMs();
   frame->keyframeId = keyframeId;
@@ -232,7 +241,7 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId)
   ++m.keyframesInSegment;
   activatePoints(*kf);
   const double t2 = threadCpuMs();
-  finishKeyframe(kf);
+  finishKeyframe(kf, seedKeyframe);
   if (m.relocalization) {
     std::vector<OrbDescriptor> descriptors;
     descriptors.reserve(kf->immature.size());
@@ -277,7 +286,7 @@ void LocalMapper::activatePoints(const Keyframe &newest)
   PointActivation::eraseImmaturePoints(m_window, erase);
 }
 
-void LocalMapper::finishKeyframe(const KeyframePtr &kf)
+void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
 {
   Impl &m = *m_impl;
   const double t0 = threadCpuMs();
@@ -308,7 +317,7 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf)
   buildReferencePoints();
   dropPointsOutOfView(*kf);
   makeNewImmaturePoints(*kf);
-  if (keepsGlobalMap() && m.params.globalMap.reuse && reuseGlobalPoints(*kf) > 0) {
+  if (keepsGlobalMap() && m.params.globalMap.reuse && reuseGlobalPoints(*kf, seedKeyframe) > 0) {
     buildReferencePoints(); // re-activated points are active in the newest keyframe: tracking uses them at once
   }
   const double t2 = threadCpuMs();

@@ -81,8 +81,13 @@ public:
   bool initialize(const FramePtr &first, int firstKeyframeId, const FramePtr &second, int secondKeyframeId,
                   const TwoViewInitialization &init, const SE3d &wMfirst);
 
-  //! Make \e frame (pose cMw already set from its tracking reference) the newest keyframe.
-  void makeKeyframe(const FramePtr &frame, int keyframeId);
+  /*!
+    Make \e frame (pose cMw already set from its tracking reference) the newest keyframe.
+    \param seedKeyframe : a stored keyframe a relocalisation placed the frame against (-1: none); its stored points
+    and its neighbours' are searched for re-use whether or not they pass the usual overlap test, so that a window
+    left without points is seeded again from the stored map.
+  */
+  void makeKeyframe(const FramePtr &frame, int keyframeId, int seedKeyframe = -1);
   //! Trace the immature points of the window in \e frame (pose already set).
   void makeNonKeyframe(const FramePtr &frame);
 
@@ -225,7 +230,7 @@ private:
   void traceAll(const Frame &frame);
   void activatePoints(const Keyframe &newest);
   //! Optimise, check, build the tracking reference, drop points out of view, new immature points, marginalise.
-  void finishKeyframe(const KeyframePtr &kf);
+  void finishKeyframe(const KeyframePtr &kf, int seedKeyframe = -1);
   void buildReferencePoints();
   void dropPointsOutOfView(const Keyframe &newest);
   void makeNewImmaturePoints(Keyframe &kf);
@@ -238,7 +243,10 @@ private:
   //! residual with.
   std::vector<PosePoseEdge> posePoseEdges(const Keyframe &kf, const std::vector<PairInformation> &pairs) const;
   //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
-  int reuseGlobalPoints(Keyframe &newest);
+  //! \e seedKeyframe: see makeKeyframe().
+  int reuseGlobalPoints(Keyframe &newest, int seedKeyframe);
+  //! A stored keyframe, its co-visible keyframes and its neighbours in time that the global map holds (not culled).
+  std::vector<int> storedNeighbourhood(int id) const;
   //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.
   bool detectLoop(const Keyframe &newest);
   //! ORB matches between the window's points and the candidate's side, then the Sim(3) RANSAC.

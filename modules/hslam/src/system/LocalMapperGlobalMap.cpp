@@ -214,7 +214,7 @@ void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInf
   }
 }
 
-int LocalMapper::reuseGlobalPoints(Keyframe &newest)
+int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
 {
   Impl &m = *m_impl;
   ++m_reuse.keyframes;
@@ -233,7 +233,16 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
   const ReuseTarget target = makeReuseTarget(
       newest.frame->cMw, m.K0, m.width, m.height, m_segment, newest.immature,
       [](const ImmaturePoint &) { return true; }, keypointToImmature);
-  const std::vector<int> searched = selectReuseKeyframes(m_globalMap, windowIds, target, g.reuseMaxKeyframes);
+  std::vector<int> searched = selectReuseKeyframes(m_globalMap, windowIds, target, g.reuseMaxKeyframes);
+  if (seedKeyframe >= 0) {
+    // The place a relocalisation found: its stored corners project into the keyframe, but spread over several
+    // keyframes, each with too few to pass the overlap test alone (3-lap synthetic loop: 7 samples, 10 needed).
+    for (int id : storedNeighbourhood(seedKeyframe)) {
+      if (std::find(searched.begin(), searched.end(), id) == searched.end()) {
+        searched.push_back(id);
+      }
+    }
+  }
   if (searched.empty()) {
     return 0;
   }
@@ -246,13 +255,22 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest)
     match.idepthVar *= g.priorVarianceScale;
   }
   int refused = 0;
+  // A keyframe alone in the window (seeded from the stored map) has no other image to refine a point against: the
+  // stored estimate is taken as it is, and the next keyframes refine it under its prior.
+  const bool alone = m_window.size() == 1;
   for (const ReuseMatch &match : matches) {
     const size_t ii = keypointToImmature[static_cast<size_t>(match.keypoint)];
     const ImmaturePoint &pt = newest.immature[ii];
     const double priorWeight = 1. / std::max(match.idepthVar, 1e-12);
-    const PointActivationResult r =
-        m.optimizer.optimizeNewPoint(newest.id(), pt.u, pt.v, match.idepth, pt.patch, pt.patchWeight,
-                                     kReactivationIterations, match.idepth, priorWeight);
+    PointActivationResult r;
+    if (alone) {
+      r.accepted = true;
+      r.idepth = match.idepth;
+      r.idepthHessian = priorWeight;
+    } else {
+      r = m.optimizer.optimizeNewPoint(newest.id(), pt.u, pt.v, match.idepth, pt.patch, pt.patchWeight,
+                                       kReactivationIterations, match.idepth, priorWeight);
+    }
     // Re-activation keeps the old estimate: the photometric refinement must stay within its prior.
     if (!r.accepted || std::fabs(r.idepth - match.idepth) > g.fusionSigmas * std::sqrt(match.idepthVar)) {
       ++refused;

@@ -91,23 +91,31 @@ bool LocalMapper::indexGlobalMap()
   return true;
 }
 
-void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const
+std::vector<int> LocalMapper::storedNeighbourhood(int id) const
 {
-  const Impl &m = *m_impl;
-  features.clear();
-  keyframeIds.clear();
   std::vector<int> ids = m_globalMap.covisibleWith(id);
   for (int n = id - kRelocalizationNeighbours; n <= id + kRelocalizationNeighbours; ++n) {
     ids.push_back(n);
   }
   std::sort(ids.begin(), ids.end());
   ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<int> out;
   for (int n : ids) {
     const GlobalKeyframe *kf = m_globalMap.find(n);
-    if (!kf || kf->culled) {
-      continue;
+    if (kf && !kf->culled) {
+      out.push_back(n);
     }
-    keyframeIds.push_back(n);
+  }
+  return out;
+}
+
+void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const
+{
+  const Impl &m = *m_impl;
+  features.clear();
+  keyframeIds = storedNeighbourhood(id);
+  for (int n : keyframeIds) {
+    const GlobalKeyframe *kf = m_globalMap.find(n);
     const SE3d wMc = kf->cMw.inverse();
     for (const GlobalPoint &p : kf->points) {
       if (!p.hasOrb || p.state != GlobalPointState::stored || !(p.idepth > 0.f)) {

@@ -200,9 +200,23 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   SE3d newMref;
   AffineBrightness affine;
   CoarseTrackingResult result;
-  const bool success = estimatePose(frame, history, newMref, affine, result);
+  bool success = estimatePose(frame, history, newMref, affine, result);
   const bool relocalizedNow = m_relocalizing;
-  if (m_relocalizing) {
+  // The window cannot hold the relocalised pose when it has (almost) no point left: a turn in place made keyframes
+  // that triangulated nothing (3-lap synthetic loop: 198, 73, 29, then 0 window points, while bag-of-words + PnP
+  // placed every lost frame in the stored map with 73-144 inliers). Two consecutive fixes that agree are then taken
+  // as they are, and the frame becomes a keyframe: the stored points it sees are re-activated in it (early
+  // adoption, LocalMapper::reuseGlobalPoints) and the window has points again.
+  const bool seedFromStoredMap =
+      m_relocalizing && !success && m_storedMapFixAgreed && m_storedMapFix.frameId == frame->id &&
+      m_params.tracking.seedFromStoredMap && m_mapper->keepsGlobalMap() && m_params.globalMap.reuse &&
+      (result.status == CoarseTrackingStatus::noReference || result.status == CoarseTrackingStatus::tooFewResiduals);
+  if (seedFromStoredMap) {
+    newMref = m_storedMapFix.cMw * wMref;
+    affine = m_lastAffine;
+    success = true;
+  }
+  if (m_relocalizing && !seedFromStoredMap) {
     // Accepted only when the map's corners confirm it too (tracking.relocalizationCheckInliers, 15 by default): a lost
     // camera pointed at something new can be aligned photometrically to a wrong place (measured on 7-Scenes after
     // covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with a gain change of e^-1.4).
@@ -231,13 +245,16 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
       m_runStats.addTrackingMs(nowMs() - t0);
       return vpHSlam::stateLost; // the relocalised pose did not hold against the map: try the next frame
     }
+  }
+  if (m_relocalizing) {
     m_relocalizing = false;
     if (m_windowRelocalization) {
       m_windowRelocalization->clear(); // the window moves on: its described keyframes would go stale
     }
     ++m_relocSuccesses;
     VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": relocalised after " << frame->timestamp - m_lostSince
-                                            << " s, tracking resumes in the same map");
+                                            << " s, tracking resumes in the same map"
+                                            << (seedFromStoredMap ? "; the window is seeded from the stored map" : ""));
   }
   const bool finite = newMref.translation().allFinite() && newMref.unitQuaternion().coeffs().allFinite() &&
                       std::isfinite(affine.a) && std::isfinite(affine.b);
@@ -257,6 +274,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
                                             << coarseTrackingStatusName(result.status) << "); relocalising");
     m_relocalizing = true;
     m_lostSince = frame->timestamp;
+    m_storedMapFix = StoredMapFix();
     m_consecutiveFailures = 0;
     return vpHSlam::stateLost;
   }
@@ -280,7 +298,11 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   m_lastFrameId = frame->id;
 
   // A failed alignment keeps the predicted pose (DSO) but neither makes a keyframe nor feeds mapping.
-  const bool needKeyframe = success && keyframeNeeded(frame, result);
+  bool needKeyframe = success && !seedFromStoredMap && keyframeNeeded(frame, result);
+  if (seedFromStoredMap) {
+    needKeyframe = true;
+    m_framesSinceKeyframeRequest = 0;
+  }
   m_runStats.addTrackingMs(nowMs() - t0);
   if (success) {
     MappingJob job;
@@ -288,6 +310,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     job.referenceKeyframe = m_trackerRefKeyframe;
     job.refMc = refMc;
     job.needKeyframe = needKeyframe;
+    job.seedKeyframe = seedFromStoredMap ? m_storedMapFix.keyframeId : -1;
     deliver(std::move(job));
   }
   return vpHSlam::stateTracking;
@@ -426,6 +449,8 @@ void SlamSystem::declareLost(bool discardSegment)
   m_trackerRefKeyframe = -1;
   m_initialized = false;
   m_relocalizing = false;
+  m_storedMapFix = StoredMapFix();
+  m_storedMapFixAgreed = false;
   m_initializer->reset();
   m_initFirstFrame.reset();
   m_pendingFrames.clear();
@@ -464,6 +489,7 @@ void SlamSystem::reset()
   {
     std::lock_guard<std::mutex> lock(m_queueMutex);
     m_pendingKeyframeRef = -1;
+    m_pendingSeedKeyframe = -1;
   }
   m_state = vpHSlam::stateInitializing;
   m_frames = 0;
@@ -474,6 +500,8 @@ void SlamSystem::reset()
   m_segmentsStarted = 0;
   m_restartRequested = false;
   m_relocalizing = false;
+  m_storedMapFix = StoredMapFix();
+  m_storedMapFixAgreed = false;
   m_relocAttempts = 0;
   m_relocSuccesses = 0;
   m_localizationReady = false; // the loaded map went with the rest

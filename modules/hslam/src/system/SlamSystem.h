@@ -60,6 +60,7 @@ namespace hslam
 {
 // LocalMapper: included for LocalMapper::ReuseStatistics in the snapshot.
 class TwoViewInitializer;
+struct RelocalizationResult;
 
 class VISP_EXPORT SlamSystem
 {
@@ -116,6 +117,7 @@ private:
     int referenceKeyframe = -1; //!< keyframe id the frame was tracked against
     SE3d refMc;                 //!< its pose relative to that keyframe
     bool needKeyframe = false;
+    int seedKeyframe = -1; //!< the frame seeds an emptied window: stored keyframe it was relocalised against
   };
 
   //! Not initialised yet: one two-view attempt (SlamSystemInitialization.cpp, like the backfill below).
@@ -134,6 +136,9 @@ private:
     pose-only refinement; on success \e history holds the pose (no motion) for the joint refinement that follows.
   */
   bool relocalizePose(const FramePtr &frame, CoarseMotionHistory &history);
+  //! Keep \e r (a bag-of-words relocalisation of \e frame) as m_storedMapFix and say whether it agrees with the
+  //! previous frame's.
+  void recordStoredMapFix(const FramePtr &frame, const RelocalizationResult &r);
   void adoptPreparedReference();
   bool keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result);
   void deliver(MappingJob job);
@@ -173,7 +178,17 @@ private:
   std::unique_ptr<WindowRelocalization> m_windowRelocalization; //!< with m_hybrid: the window's triangulated ORB
   //! Matches of the last relocalisation that found a pose (world point, pixel): they can confirm the aligned pose.
   std::vector<ReprojectionObservation> m_relocalizationEvidence;
-  IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)
+  //! A lost frame placed by bag-of-words + PnP in the stored map (SlamSystemRelocalization.cpp): two consecutive
+  //! ones that agree may seed an emptied window again.
+  struct StoredMapFix {
+    int frameId = -1;
+    SE3d cMw;
+    int keyframeId = -1;     //!< the stored keyframe PnP placed it against
+    double medianDepth = 0.; //!< of its PnP inliers, map units
+  };
+  StoredMapFix m_storedMapFix;
+  bool m_storedMapFixAgreed = false; //!< the current frame's fix agrees with the previous frame's
+  IndirectStepResult m_indirect;     //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
   AffineBrightness m_trackerRefAffine; //!< brightness of the reference when it was set
@@ -226,7 +241,8 @@ private:
   std::condition_variable m_jobDone;      //!< the mapping thread finished a job
   bool m_stopMapping = false;
   bool m_mappingBusy = false;
-  int m_pendingKeyframeRef = -1; //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
+  int m_pendingKeyframeRef = -1;  //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
+  int m_pendingSeedKeyframe = -1; //!< a queued frame seeds the window from this stored keyframe (see MappingJob)
 
   // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
   double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread

@@ -54,6 +54,9 @@ void SlamSystem::deliver(MappingJob job)
     if (job.needKeyframe) {
       m_pendingKeyframeRef = std::max(m_pendingKeyframeRef, job.referenceKeyframe);
     }
+    if (job.seedKeyframe >= 0) {
+      m_pendingSeedKeyframe = job.seedKeyframe; // served by the keyframe made next, whichever frame it is
+    }
     m_queue.push_back(std::move(job));
     // Bounded memory when mapping falls far behind: the oldest queued frames are dropped for mapping (their
     // keyframe request survives in m_pendingKeyframeRef; they keep their tracked pose).
@@ -97,6 +100,10 @@ void SlamSystem::mappingLoop()
       catchingUp = false;
     }
     job.needKeyframe = makeKeyframe;
+    job.seedKeyframe = makeKeyframe ? m_pendingSeedKeyframe : -1;
+    if (makeKeyframe) {
+      m_pendingSeedKeyframe = -1;
+    }
     m_mappingBusy = true;
     lock.unlock();
     {
@@ -126,7 +133,7 @@ double SlamSystem::runJob(const MappingJob &job)
   const int id = m_keyframeCount.fetch_add(1);
   m_recorder.addKeyframe(id, job.frame->id, job.frame->timestamp, wMref * job.refMc, m_segment);
   m_recorder.addFrame(job.frame->id, job.frame->timestamp, id, SE3d(), m_segment);
-  m_mapper->makeKeyframe(job.frame, id);
+  m_mapper->makeKeyframe(job.frame, id, job.seedKeyframe);
   publishAfterKeyframe();
   m_runStats.addKeyframeMappingMs(nowMs() - t0);
   const double cpu = threadCpuMs() - c0;

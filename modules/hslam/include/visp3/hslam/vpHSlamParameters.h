@@ -155,6 +155,8 @@ public:
                                          //!< alignments measured with 0-3, right ones with 16-58)
     bool relocalizeInWindow = true;      //!< also match a lost frame to ORB points triangulated between the window's
                                     //!< keyframes (found the camera after 40-frame covers where BoW candidates fail)
+    bool seedFromStoredMap = true; //!< a window left without points takes two agreeing PnP fixes in the stored map
+                                   //!< and re-activates the stored points seen there (slam / vo-reuse modes)
   };
 
   /*!
