@@ -178,3 +178,41 @@ TEST_F(Relocalization, FindsThePoseWhenMostMatchesAreWrong)
   EXPECT_GE(hslam::countReprojectionInliers(truth, result.inlierObservations, kK, 5.991), result.inliers - 3);
 }
 } // namespace
+
+// Two consecutive fixes agree when a camera could have moved between them in a frame's time: rotation up to 10
+// degrees, camera centre up to 10 % of the scene's median depth.
+TEST(RelocalizationFixes, AgreeOnlyWithinAFramesMotion)
+{
+  const SE3d previous(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix(), Eigen::Vector3d(1, 2, 3));
+  const SE3d wMp = previous.inverse();
+  auto moved = [&](double degrees, const Eigen::Vector3d &centreShift) {
+    // Turn about the camera's own axis and shift its centre (world frame): the returned pose is cMw.
+    const Eigen::Matrix3d wRc =
+        wMp.rotationMatrix() * Eigen::AngleAxisd(degrees * M_PI / 180., Eigen::Vector3d::UnitX()).toRotationMatrix();
+    return SE3d(wRc, wMp.translation() + centreShift).inverse();
+  };
+  const double depth = 2.;
+  const hslam::FixAgreement same = hslam::compareFixes(previous, previous, depth);
+  EXPECT_TRUE(same.agrees);
+  EXPECT_NEAR(same.angleDeg, 0., 1e-6);
+  EXPECT_NEAR(same.depthShare, 0., 1e-9);
+  const hslam::FixAgreement small = hslam::compareFixes(previous, moved(2., Eigen::Vector3d(0.02, 0., 0.)), depth);
+  EXPECT_TRUE(small.agrees);
+  EXPECT_NEAR(small.angleDeg, 2., 1e-6);
+  EXPECT_NEAR(small.depthShare, 0.01, 1e-9);
+  EXPECT_FALSE(hslam::compareFixes(previous, moved(12., Eigen::Vector3d::Zero()), depth).agrees);
+  EXPECT_FALSE(hslam::compareFixes(previous, moved(0., Eigen::Vector3d(0., 0.25, 0.)), depth).agrees);
+  EXPECT_TRUE(hslam::compareFixes(previous, moved(0., Eigen::Vector3d(0., 0.15, 0.)), depth).agrees);
+  EXPECT_FALSE(hslam::compareFixes(previous, previous, 0.).agrees); // no depth: nothing to compare against
+
+  // The median depth is taken over the inliers in the frame the fix placed.
+  hslam::RelocalizationResult r;
+  r.cTw = previous;
+  for (double z : {1., 4., 2., 3., 100.}) {
+    hslam::ReprojectionObservation o;
+    o.wX = wMp * Eigen::Vector3d(0.1, -0.2, z);
+    r.inlierObservations.push_back(o);
+  }
+  EXPECT_NEAR(hslam::medianInlierDepth(r), 3., 1e-9);
+  EXPECT_EQ(hslam::medianInlierDepth(hslam::RelocalizationResult()), 0.);
+}

@@ -183,8 +183,7 @@ private:
   struct StoredMapFix {
     int frameId = -1;
     SE3d cMw;
-    int keyframeId = -1;     //!< the stored keyframe PnP placed it against
-    double medianDepth = 0.; //!< of its PnP inliers, map units
+    int keyframeId = -1; //!< the stored keyframe PnP placed it against
   };
   StoredMapFix m_storedMapFix;
   bool m_storedMapFixAgreed = false; //!< the current frame's fix agrees with the previous frame's

@@ -10,20 +10,8 @@
 
 #include <visp3/hslam/vpHSlamLog.h>
 
-#include <algorithm>
-#include <cmath>
-
 namespace hslam
 {
-namespace
-{
-//! Two consecutive stored-map fixes agree when they are at most this far apart in rotation (a hand-held camera
-//! turning fast moves a few degrees a frame)...
-constexpr double kStoredMapFixMaxRotationDeg = 10.;
-//! ... and the camera centre moved at most this share of the scene's median depth.
-constexpr double kStoredMapFixMaxMove = 0.1;
-} // namespace
-
 bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &history)
 {
   ++m_relocAttempts;
@@ -102,28 +90,13 @@ void SlamSystem::recordStoredMapFix(const FramePtr &frame, const RelocalizationR
   fix.frameId = frame->id;
   fix.cMw = r.cTw;
   fix.keyframeId = r.keyframeId;
-  std::vector<double> depths;
-  depths.reserve(r.inlierObservations.size());
-  for (const ReprojectionObservation &o : r.inlierObservations) {
-    depths.push_back((r.cTw * o.wX).z());
-  }
-  if (!depths.empty()) {
-    std::nth_element(depths.begin(), depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2), depths.end());
-    fix.medianDepth = depths[depths.size() / 2];
-  }
-  // Two frames in a row placed where a camera could have moved in a frame's time: a wrong PnP consensus (a
-  // repeated texture, a few accidental matches) lands somewhere else every frame. Measured on the 3-lap synthetic
-  // loop, after the window emptied during a turn in place: 12 pairs of consecutive fixes, 0.7-1.8 degrees and
-  // 0.4-2.2 % of the scene depth apart.
   const StoredMapFix &previous = m_storedMapFix;
-  if (previous.frameId >= 0 && previous.frameId + 1 == frame->id && fix.medianDepth > 0.) {
-    const SE3d relative = fix.cMw * previous.cMw.inverse();
-    const double angleDeg = Eigen::AngleAxisd(relative.rotationMatrix()).angle() * 180. / M_PI;
-    const double moved = (fix.cMw.inverse().translation() - previous.cMw.inverse().translation()).norm();
-    m_storedMapFixAgreed = angleDeg <= kStoredMapFixMaxRotationDeg && moved <= kStoredMapFixMaxMove * fix.medianDepth;
-    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": stored-map fix " << angleDeg << " deg and "
-                                             << moved / fix.medianDepth << " scene depths from the previous frame's"
-                                             << (m_storedMapFixAgreed ? " (agrees)" : ""));
+  if (previous.frameId >= 0 && previous.frameId + 1 == frame->id) {
+    const FixAgreement a = compareFixes(previous.cMw, fix.cMw, medianInlierDepth(r));
+    m_storedMapFixAgreed = a.agrees;
+    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": stored-map fix " << a.angleDeg << " deg and "
+                                             << a.depthShare << " scene depths from the previous frame's"
+                                             << (a.agrees ? " (agrees)" : ""));
   }
   m_storedMapFix = fix;
 }

@@ -4,6 +4,7 @@
 #include "tracking/Relocalizer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 
 #include <Eigen/Geometry>
@@ -214,5 +215,33 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     }
   }
   return result;
+}
+double medianInlierDepth(const RelocalizationResult &r)
+{
+  std::vector<double> depths;
+  depths.reserve(r.inlierObservations.size());
+  for (const ReprojectionObservation &o : r.inlierObservations) {
+    depths.push_back((r.cTw * o.wX).z());
+  }
+  if (depths.empty()) {
+    return 0.;
+  }
+  const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
+  std::nth_element(depths.begin(), middle, depths.end());
+  return *middle;
+}
+
+FixAgreement compareFixes(const SE3d &previousCMw, const SE3d &currentCMw, double medianDepth)
+{
+  FixAgreement a;
+  const SE3d relative = currentCMw * previousCMw.inverse();
+  a.angleDeg = Eigen::AngleAxisd(relative.rotationMatrix()).angle() * 180. / M_PI;
+  const double moved = (currentCMw.inverse().translation() - previousCMw.inverse().translation()).norm();
+  if (!(medianDepth > 0.)) {
+    return a;
+  }
+  a.depthShare = moved / medianDepth;
+  a.agrees = a.angleDeg <= kFixAgreementMaxRotationDeg && a.depthShare <= kFixAgreementMaxDepthShare;
+  return a;
 }
 } // namespace hslam
