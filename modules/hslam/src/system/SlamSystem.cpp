@@ -208,7 +208,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   // as they are, and the frame becomes a keyframe: the stored points it sees are re-activated in it (early
   // adoption, LocalMapper::reuseGlobalPoints) and the window has points again.
   const bool seedFromStoredMap =
-      m_relocalizing && !success && m_storedMapFixAgreed && m_storedMapFix.frameId == frame->id &&
+      m_relocalizing && !success && m_storedMapFix.frameId == frame->id && m_storedMapFix.agreesWithPrevious &&
       m_params.tracking.seedFromStoredMap && m_mapper->keepsGlobalMap() && m_params.globalMap.reuse &&
       (result.status == CoarseTrackingStatus::noReference || result.status == CoarseTrackingStatus::tooFewResiduals);
   if (seedFromStoredMap) {
@@ -298,10 +298,9 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   m_lastFrameId = frame->id;
 
   // A failed alignment keeps the predicted pose (DSO) but neither makes a keyframe nor feeds mapping.
-  bool needKeyframe = success && !seedFromStoredMap && keyframeNeeded(frame, result);
+  const bool needKeyframe = seedFromStoredMap || (success && keyframeNeeded(frame, result));
   if (seedFromStoredMap) {
-    needKeyframe = true;
-    m_framesSinceKeyframeRequest = 0;
+    m_framesSinceKeyframeRequest = 0; // as keyframeNeeded() does for a keyframe it asks for
   }
   m_runStats.addTrackingMs(nowMs() - t0);
   if (success) {
@@ -450,7 +449,6 @@ void SlamSystem::declareLost(bool discardSegment)
   m_initialized = false;
   m_relocalizing = false;
   m_storedMapFix = StoredMapFix();
-  m_storedMapFixAgreed = false;
   m_initializer->reset();
   m_initFirstFrame.reset();
   m_pendingFrames.clear();
@@ -501,7 +499,6 @@ void SlamSystem::reset()
   m_restartRequested = false;
   m_relocalizing = false;
   m_storedMapFix = StoredMapFix();
-  m_storedMapFixAgreed = false;
   m_relocAttempts = 0;
   m_relocSuccesses = 0;
   m_localizationReady = false; // the loaded map went with the rest

@@ -183,11 +183,11 @@ private:
   struct StoredMapFix {
     int frameId = -1;
     SE3d cMw;
-    int keyframeId = -1; //!< the stored keyframe PnP placed it against
+    int keyframeId = -1;             //!< the stored keyframe PnP placed it against
+    bool agreesWithPrevious = false; //!< the previous frame had a fix too, and the two agree (compareFixes)
   };
-  StoredMapFix m_storedMapFix;
-  bool m_storedMapFixAgreed = false; //!< the current frame's fix agrees with the previous frame's
-  IndirectStepResult m_indirect;     //!< the current frame's indirect step (its term is used by m_tracker)
+  StoredMapFix m_storedMapFix;   //!< the last lost frame's fix (frameId -1: none)
+  IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
   AffineBrightness m_trackerRefAffine; //!< brightness of the reference when it was set

@@ -16,7 +16,6 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
 {
   ++m_relocAttempts;
   m_relocalizationEvidence.clear();
-  m_storedMapFixAgreed = false;
   m_hybrid->extract(frame->raw);
   RelocalizationFrame lost = m_hybrid->relocalizationFrame();
   if (lost.descriptors.empty()) {
@@ -93,7 +92,7 @@ void SlamSystem::recordStoredMapFix(const FramePtr &frame, const RelocalizationR
   const StoredMapFix &previous = m_storedMapFix;
   if (previous.frameId >= 0 && previous.frameId + 1 == frame->id) {
     const FixAgreement a = compareFixes(previous.cMw, fix.cMw, medianInlierDepth(r));
-    m_storedMapFixAgreed = a.agrees;
+    fix.agreesWithPrevious = a.agrees;
     VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": stored-map fix " << a.angleDeg << " deg and "
                                              << a.depthShare << " scene depths from the previous frame's"
                                              << (a.agrees ? " (agrees)" : ""));
