@@ -164,6 +164,41 @@ TEST_F(HybridTrackingTest, cornersAreSpreadAndKeepTheirDistance)
   EXPECT_EQ(again, corners) << "detection must be deterministic";
 }
 
+TEST_F(HybridTrackingTest, strongCornersFirstGiveTheCornersOfOneDetection)
+{
+  // Four images: the scene (corners of every strength), a high-contrast noise texture (the budget is filled at the
+  // strictest threshold), the same texture at a tenth of its contrast (no corner scores 10: the last fallback), and
+  // strong texture in the left quarter only, faint elsewhere (the strong corners fill the budget only once the
+  // first pass's per-cell caps are lifted, which must not count: the weak cells have their share at threshold 7).
+  vpImage<unsigned char> noisy(kHeight, kWidth), faint(kHeight, kWidth), patchy(kHeight, kWidth);
+  unsigned int state = 12345u;
+  for (unsigned int i = 0; i < noisy.getSize(); ++i) {
+    state = state * 1664525u + 1013904223u;
+    noisy.bitmap[i] = static_cast<unsigned char>(state >> 24);
+    faint.bitmap[i] = static_cast<unsigned char>(120 + noisy.bitmap[i] / 10);
+    patchy.bitmap[i] = i % kWidth < kWidth / 4 ? noisy.bitmap[i] : faint.bitmap[i];
+  }
+  const vpImage<unsigned char> *images[] = {&reference.raw, &noisy, &faint, &patchy};
+  for (const vpImage<unsigned char> *image : images) {
+    for (int threshold : {5, 7, 12}) {
+      for (int budget : {10, 60, 250, 1000, 20000}) {
+        CornerOptions options;
+        options.threshold = threshold;
+        options.maxCorners = budget;
+        options.border = kOrbBorderPx + 1;
+        std::vector<cv::Point2f> ladder, single;
+        std::vector<float> ladderScores, singleScores;
+        detectCorners(*image, options, ladder, &ladderScores);
+        options.strongFirst = false;
+        detectCorners(*image, options, single, &singleScores);
+        ASSERT_FALSE(single.empty());
+        EXPECT_EQ(ladder, single) << "threshold " << threshold << ", budget " << budget;
+        EXPECT_EQ(ladderScores, singleScores) << "threshold " << threshold << ", budget " << budget;
+      }
+    }
+  }
+}
+
 TEST_F(HybridTrackingTest, sharedSelectionPutsCornersFirstWithinTheirShare)
 {
   REQUIRE_TEXTURES();

@@ -10,7 +10,8 @@
   dropped (their ORB descriptor would leave the image). Corners are then taken strongest first under two rules: no
   two closer than a minimum distance, and at most a share of the budget per grid cell, so that one textured area
   cannot take every corner; a second pass gives what is left of the budget to the strongest remaining corners
-  (distance rule still applied).
+  (distance rule still applied). The result is that of a single detection at the threshold, computed more cheaply
+  when strong corners fill the budget (CornerOptions::strongFirst).
 
   Threading: free function, no state.
 */
@@ -34,6 +35,9 @@ struct CornerOptions {
   int border = 20;             //!< corners closer than this to the image edge are dropped, pixels
   int cellSizePx = 40;         //!< bucketing cell side, pixels
   double cellShareFactor = 2.; //!< a cell takes at most this times its even share of the budget in the first pass
+  //! Detect at stricter thresholds first (20, then 10) and at \e threshold only when they do not fill the budget:
+  //! the same corners, at a fraction of the cost on textured images (see detectCorners()). False: one detection.
+  bool strongFirst = true;
 };
 
 /*!
