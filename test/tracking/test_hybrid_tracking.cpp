@@ -189,6 +189,14 @@ TEST_F(HybridTrackingTest, strongCornersFirstGiveTheCornersOfOneDetection)
         std::vector<cv::Point2f> ladder, single;
         std::vector<float> ladderScores, singleScores;
         detectCorners(*image, options, ladder, &ladderScores);
+        // With a hint from another image (every start of the ladder, stale or not): the same corners again.
+        for (int start : {0, 10, 15, 20, 40}) {
+          CornerThresholdHint hint;
+          hint.threshold = start;
+          std::vector<cv::Point2f> hinted;
+          detectCorners(*image, options, hinted, nullptr, &hint);
+          EXPECT_EQ(hinted, ladder) << "hint " << start << ", threshold " << threshold << ", budget " << budget;
+        }
         options.strongFirst = false;
         detectCorners(*image, options, single, &singleScores);
         ASSERT_FALSE(single.empty());

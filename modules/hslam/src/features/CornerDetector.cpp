@@ -52,9 +52,15 @@ private:
   std::vector<std::vector<cv::Point2f>> m_cells;
 };
 
-//! FAST thresholds tried first, in this order, before the configured one (the first is ORB-SLAM's initial FAST
+//! FAST thresholds tried first, strongest first, before the configured one (the first is ORB-SLAM's initial FAST
 //! threshold). See detectCorners().
-constexpr int kStrongThresholds[] = {20, 10};
+constexpr int kStrongThresholds[] = {20, 15, 10};
+
+//! Outcome of the selection passes.
+struct SpreadResult {
+  bool filledInFirstPass = false; //!< the budget was filled before the per-cell caps were lifted
+  float weakest = 0.f;            //!< then: the lowest FAST score among the selected corners
+};
 
 //! FAST corners of \e image at \e threshold, inside the border, strongest first (ties by position).
 void detectSorted(const cv::Mat &image, int threshold, int border, std::vector<cv::KeyPoint> &fast)
@@ -76,12 +82,9 @@ void detectSorted(const cv::Mat &image, int threshold, int border, std::vector<c
   });
 }
 
-/*!
-  The two selection passes over \e fast (sorted, strongest first). \return true when the budget was filled during
-  the first pass (the bucketed one).
-*/
-bool selectSpread(const std::vector<cv::KeyPoint> &fast, int width, int height, const CornerOptions &options,
-                  std::vector<cv::Point2f> &corners, std::vector<float> *responses)
+//! The two selection passes over \e fast (sorted, strongest first).
+SpreadResult selectSpread(const std::vector<cv::KeyPoint> &fast, int width, int height, const CornerOptions &options,
+                          std::vector<cv::Point2f> &corners, std::vector<float> *responses)
 {
   corners.clear();
   if (responses) {
@@ -95,10 +98,11 @@ bool selectSpread(const std::vector<cv::KeyPoint> &fast, int width, int height, 
   std::vector<bool> taken(fast.size(), false);
   DistanceGrid grid(width, height, options.minDistance);
   const size_t budget = static_cast<size_t>(options.maxCorners);
+  SpreadResult result;
   for (int pass = 0; pass < 2; ++pass) {
     for (size_t i = 0; i < fast.size(); ++i) {
       if (corners.size() >= budget) {
-        return pass == 0;
+        break;
       }
       if (taken[i]) {
         continue;
@@ -112,20 +116,22 @@ bool selectSpread(const std::vector<cv::KeyPoint> &fast, int width, int height, 
       ++perCell[c];
       grid.add(p);
       corners.push_back(p);
+      result.weakest = fast[i].response; // the first pass takes them strongest first
       if (responses) {
         responses->push_back(fast[i].response);
       }
     }
     if (corners.size() >= budget) {
-      return pass == 0;
+      result.filledInFirstPass = pass == 0;
+      break;
     }
   }
-  return false;
+  return result;
 }
 } // namespace
 
 void detectCorners(const vpImage<unsigned char> &I, const CornerOptions &options, std::vector<cv::Point2f> &corners,
-                   std::vector<float> *responses)
+                   std::vector<float> *responses, CornerThresholdHint *hint)
 {
   corners.clear();
   if (responses) {
@@ -141,18 +147,35 @@ void detectCorners(const vpImage<unsigned char> &I, const CornerOptions &options
   // neighbours' threshold: the corners scoring T or more are the same at threshold T as at any lower one, in the
   // same order at the head of the list. When they fill the budget in the bucketed first pass, the weaker ones would
   // never have been reached, so the detection at T alone gives exactly the corners of the full one. It is much
-  // cheaper: at threshold 7 most pixels of a textured image pass FAST's quick test (KITTI 06, 1241x376: about 5 ms
-  // of a keyframe's mapping). The ladder's steps are where the selected corners' weakest scores fell on the three
-  // real shared sequences (9-19; KITTI over 20).
+  // cheaper: at threshold 7 most pixels of a textured image pass FAST's quick test (bench_corner_detector). The
+  // hint starts the ladder at the step the previous image's corners would have filled, so that a caller whose
+  // images need the full detection does not pay for the failing strong ones every time.
+  const int start = hint ? hint->threshold : kStrongThresholds[0];
+  SpreadResult result;
+  bool done = false;
   for (int strong : kStrongThresholds) {
-    if (options.strongFirst && options.threshold < strong) {
-      detectSorted(image, strong, options.border, fast);
-      if (selectSpread(fast, w, h, options, corners, responses)) {
-        return;
+    if (!options.strongFirst || strong > start || strong <= options.threshold) {
+      continue;
+    }
+    detectSorted(image, strong, options.border, fast);
+    result = selectSpread(fast, w, h, options, corners, responses);
+    if (result.filledInFirstPass) {
+      done = true;
+      break;
+    }
+  }
+  if (!done) {
+    detectSorted(image, options.threshold, options.border, fast);
+    result = selectSpread(fast, w, h, options, corners, responses);
+  }
+  if (hint) {
+    hint->threshold = 0; // next time: the configured threshold at once
+    for (int strong : kStrongThresholds) {
+      if (result.filledInFirstPass && static_cast<float>(strong) <= result.weakest) {
+        hint->threshold = strong;
+        break;
       }
     }
   }
-  detectSorted(image, options.threshold, options.border, fast);
-  selectSpread(fast, w, h, options, corners, responses);
 }
 } // namespace hslam

@@ -35,17 +35,25 @@ struct CornerOptions {
   int border = 20;             //!< corners closer than this to the image edge are dropped, pixels
   int cellSizePx = 40;         //!< bucketing cell side, pixels
   double cellShareFactor = 2.; //!< a cell takes at most this times its even share of the budget in the first pass
-  //! Detect at stricter thresholds first (20, then 10) and at \e threshold only when they do not fill the budget:
+  //! Detect at stricter thresholds first (20, 15, 10) and at \e threshold only when they do not fill the budget:
   //! the same corners, at a fraction of the cost on textured images (see detectCorners()). False: one detection.
   bool strongFirst = true;
+};
+
+//! Where the next detectCorners() of the same caller starts its ladder of strict thresholds (a speed hint only).
+struct CornerThresholdHint {
+  int threshold = 20; //!< strictest FAST threshold to try first; 0: the configured threshold at once
 };
 
 /*!
   FAST corners of \e I (see the file comment), strongest first, level-0 pixel coordinates.
   \param responses : optional, the FAST score of each returned corner.
+  \param hint : optional, kept by the caller from one image to the next (updated): the ladder starts at the
+  strictest threshold the previous image's corners would have filled. The corners do not depend on it.
 */
 VISP_EXPORT void detectCorners(const vpImage<unsigned char> &I, const CornerOptions &options,
-                               std::vector<cv::Point2f> &corners, std::vector<float> *responses = nullptr);
+                               std::vector<cv::Point2f> &corners, std::vector<float> *responses = nullptr,
+                               CornerThresholdHint *hint = nullptr);
 } // namespace hslam
 
 #endif

@@ -33,7 +33,7 @@ void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImageP
       std::min(m_params.maxCorners, static_cast<int>(std::floor(m_params.cornerShare * std::max(0, desiredCount))));
   options.minDistance = m_params.cornerMinDistance;
   options.border = kOrbBorderPx + 1; // every corner gets a descriptor
-  detectCorners(raw, options, m_corners);
+  detectCorners(raw, options, m_corners, nullptr, &m_cornerHint);
   const int width = pyramid.level(0).width;
   selected.reserve(static_cast<size_t>(desiredCount) + m_corners.size());
   for (const cv::Point2f &c : m_corners) {

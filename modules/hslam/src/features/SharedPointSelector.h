@@ -22,6 +22,7 @@
 #define HSLAM_FEATURES_SHARED_POINT_SELECTOR_H
 
 #include "features/BinaryDescriptor.h"
+#include "features/CornerDetector.h"
 #include "features/ImagePyramid.h"
 #include "features/PixelSelector.h"
 #include "features/PointDescriptors.h"
@@ -74,6 +75,7 @@ private:
   PointDescriptors m_descriptors;
   std::unordered_set<long long> m_cornerPixels;
   std::vector<cv::Point2f> m_corners;
+  CornerThresholdHint m_cornerHint; //!< where the next keyframe's corner detection starts (speed only)
   std::vector<SelectedPixel> m_gradientPixels;
   int m_lastCorners = 0;
 };

@@ -32,7 +32,7 @@ void HybridTracker::extract(const vpImage<unsigned char> &raw)
   options.maxCorners = m_params.frameFeatures;
   options.minDistance = m_cornerMinDistance;
   options.border = kOrbBorderPx + 1;
-  detectCorners(raw, options, m_pixels);
+  detectCorners(raw, options, m_pixels, nullptr, &m_cornerHint);
   m_descriptors.compute(raw, m_pixels, m_desc, m_valid, &m_angles);
   m_keypoints.clear();
   m_keypoints.reserve(m_pixels.size());

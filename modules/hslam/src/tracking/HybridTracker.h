@@ -22,6 +22,7 @@
 #ifndef HSLAM_TRACKING_HYBRID_TRACKER_H
 #define HSLAM_TRACKING_HYBRID_TRACKER_H
 
+#include "features/CornerDetector.h"
 #include "features/OrbMatcher.h"
 #include "features/PointDescriptors.h"
 #include "tracking/CoarseTracker.h"
@@ -78,6 +79,7 @@ private:
   std::vector<FrameKeypoint> m_keypoints;
   // scratch
   std::vector<cv::Point2f> m_pixels;
+  CornerThresholdHint m_cornerHint; //!< where the next frame's corner detection starts (speed only)
   std::vector<OrbDescriptor> m_desc;
   std::vector<bool> m_valid;
   std::vector<float> m_angles;
