@@ -52,10 +52,6 @@ private:
   std::vector<std::vector<cv::Point2f>> m_cells;
 };
 
-//! FAST thresholds tried first, strongest first, before the configured one (the first is ORB-SLAM's initial FAST
-//! threshold). See detectCorners().
-constexpr int kStrongThresholds[] = {20, 15, 10};
-
 //! Outcome of the selection passes.
 struct SpreadResult {
   bool filledInFirstPass = false; //!< the budget was filled before the per-cell caps were lifted
@@ -150,27 +146,24 @@ void detectCorners(const vpImage<unsigned char> &I, const CornerOptions &options
   // cheaper: at threshold 7 most pixels of a textured image pass FAST's quick test (bench_corner_detector). The
   // hint starts the ladder at the step the previous image's corners would have filled, so that a caller whose
   // images need the full detection does not pay for the failing strong ones every time.
-  const int start = hint ? hint->threshold : kStrongThresholds[0];
+  const int start = hint ? hint->threshold : kCornerStrongThresholds[0];
   SpreadResult result;
-  bool done = false;
-  for (int strong : kStrongThresholds) {
-    if (!options.strongFirst || strong > start || strong <= options.threshold) {
-      continue;
-    }
-    detectSorted(image, strong, options.border, fast);
-    result = selectSpread(fast, w, h, options, corners, responses);
-    if (result.filledInFirstPass) {
-      done = true;
-      break;
+  for (int strong : kCornerStrongThresholds) {
+    if (options.strongFirst && strong <= start && strong > options.threshold) {
+      detectSorted(image, strong, options.border, fast);
+      result = selectSpread(fast, w, h, options, corners, responses);
+      if (result.filledInFirstPass) {
+        break;
+      }
     }
   }
-  if (!done) {
+  if (!result.filledInFirstPass) {
     detectSorted(image, options.threshold, options.border, fast);
     result = selectSpread(fast, w, h, options, corners, responses);
   }
   if (hint) {
     hint->threshold = 0; // next time: the configured threshold at once
-    for (int strong : kStrongThresholds) {
+    for (int strong : kCornerStrongThresholds) {
       if (result.filledInFirstPass && static_cast<float>(strong) <= result.weakest) {
         hint->threshold = strong;
         break;

@@ -27,6 +27,10 @@
 
 namespace hslam
 {
+//! FAST thresholds detectCorners() tries first, strictest first, before the configured one (the first is ORB-SLAM's
+//! initial FAST threshold).
+constexpr int kCornerStrongThresholds[] = {20, 15, 10};
+
 //! Settings of detectCorners().
 struct CornerOptions {
   int threshold = 7;           //!< FAST intensity threshold
@@ -42,7 +46,7 @@ struct CornerOptions {
 
 //! Where the next detectCorners() of the same caller starts its ladder of strict thresholds (a speed hint only).
 struct CornerThresholdHint {
-  int threshold = 20; //!< strictest FAST threshold to try first; 0: the configured threshold at once
+  int threshold = kCornerStrongThresholds[0]; //!< strictest FAST threshold to try first; 0: the configured one at once
 };
 
 /*!
