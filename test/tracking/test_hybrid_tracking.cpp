@@ -207,6 +207,31 @@ TEST_F(HybridTrackingTest, strongCornersFirstGiveTheCornersOfOneDetection)
   }
 }
 
+TEST_F(HybridTrackingTest, cornersComeStrongestFirstThenByRowThenColumn)
+{
+  // No cap, no distance rule, an unbounded budget: the output is FAST's whole sorted list.
+  CornerOptions options;
+  options.maxCorners = 1000000;
+  options.minDistance = 0.;
+  options.cellShareFactor = 1.; // with this budget, a cap above any 40x40 cell's pixel count
+  options.border = kOrbBorderPx + 1;
+  std::vector<cv::Point2f> corners;
+  std::vector<float> scores;
+  detectCorners(reference.raw, options, corners, &scores);
+  ASSERT_GT(corners.size(), 1000u);
+  size_t ties = 0;
+  for (size_t i = 1; i < corners.size(); ++i) {
+    ASSERT_GE(scores[i - 1], scores[i]) << i;
+    if (scores[i - 1] == scores[i]) {
+      ++ties;
+      const bool ordered =
+          corners[i - 1].y < corners[i].y || (corners[i - 1].y == corners[i].y && corners[i - 1].x < corners[i].x);
+      ASSERT_TRUE(ordered) << i;
+    }
+  }
+  EXPECT_GT(ties, 100u) << "the tie rule was not exercised";
+}
+
 TEST_F(HybridTrackingTest, sharedSelectionPutsCornersFirstWithinTheirShare)
 {
   REQUIRE_TEXTURES();

@@ -7,6 +7,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <utility>
 
 namespace hslam
 {
@@ -52,6 +54,10 @@ private:
   std::vector<std::vector<cv::Point2f>> m_cells;
 };
 
+//! Packed sort keys (see detectSorted()): scores below 2^16, coordinates below 2^20.
+constexpr float kMaxPackedScore = 65536.f;
+constexpr float kMaxPackedCoordinate = 1048576.f;
+
 //! Outcome of the selection passes.
 struct SpreadResult {
   bool filledInFirstPass = false; //!< the budget was filled before the per-cell caps were lifted
@@ -69,13 +75,37 @@ void detectSorted(const cv::Mat &image, int threshold, int border, std::vector<c
       std::remove_if(fast.begin(), fast.end(),
                      [&](const cv::KeyPoint &k) { return k.pt.x < lo || k.pt.y < lo || k.pt.x > hiU || k.pt.y > hiV; }),
       fast.end());
-  // Strongest first; ties broken by position so the order never depends on the sort implementation.
-  std::sort(fast.begin(), fast.end(), [](const cv::KeyPoint &a, const cv::KeyPoint &b) {
-    if (a.response != b.response) {
-      return a.response > b.response;
-    }
-    return a.pt.y != b.pt.y ? a.pt.y < b.pt.y : a.pt.x < b.pt.x;
-  });
+  // Strongest first; ties broken by position so the order never depends on the sort implementation. FAST's scores
+  // and positions are small non-negative integers: packed into one 64-bit key (score descending, then row, then
+  // column) they sort in the same order several times faster than the keypoints themselves.
+  const auto packable = [](const cv::KeyPoint &k) {
+    return k.response >= 0.f && k.response < kMaxPackedScore && k.response == std::floor(k.response) && k.pt.x >= 0.f &&
+           k.pt.x < kMaxPackedCoordinate && k.pt.x == std::floor(k.pt.x) && k.pt.y >= 0.f &&
+           k.pt.y < kMaxPackedCoordinate && k.pt.y == std::floor(k.pt.y);
+  };
+  if (!std::all_of(fast.begin(), fast.end(), packable)) {
+    std::sort(fast.begin(), fast.end(), [](const cv::KeyPoint &a, const cv::KeyPoint &b) {
+      if (a.response != b.response) {
+        return a.response > b.response;
+      }
+      return a.pt.y != b.pt.y ? a.pt.y < b.pt.y : a.pt.x < b.pt.x;
+    });
+    return;
+  }
+  std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(fast.size());
+  for (size_t i = 0; i < fast.size(); ++i) {
+    const cv::KeyPoint &k = fast[i];
+    const std::uint64_t weakness = static_cast<std::uint64_t>(kMaxPackedScore - 1.f - k.response);
+    keys[i] = {(weakness << 40) | (static_cast<std::uint64_t>(k.pt.y) << 20) | static_cast<std::uint64_t>(k.pt.x),
+               static_cast<std::uint32_t>(i)};
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<cv::KeyPoint> sorted;
+  sorted.reserve(fast.size());
+  for (const auto &key : keys) {
+    sorted.push_back(fast[key.second]);
+  }
+  fast.swap(sorted);
 }
 
 //! The two selection passes over \e fast (sorted, strongest first).
