@@ -9,7 +9,11 @@
 
 #include <visp3/hslam/vpHSlamException.h>
 
+#include <algorithm>
 #include <cmath>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <sstream>
 
 namespace hslam
@@ -28,49 +32,94 @@ constexpr float kQuarter = 0.25f;
   throwAt(code, __FILE__, static_cast<std::size_t>(line), "ImagePyramid::build: " + what);
 }
 
-//! Fills (dx, dy) and gradSq of a level whose intensities are set.
-void computeGradients(PyramidLevel &level)
+//! o[3x..3x+2] = (a[x], b[x], c[x]) for x < n: the (I, dx, dy) layout of PyramidLevel::color.
+void interleave(const float *__restrict a, const float *__restrict b, const float *__restrict c, int n,
+                float *__restrict o)
+{
+  int x = 0;
+#ifdef __SSE2__
+  // Four pixels per step: 12 floats written as three 16-byte stores (the compiler leaves this loop scalar).
+  for (; x + 4 <= n; x += 4) {
+    const __m128 va = _mm_loadu_ps(a + x); // a0 a1 a2 a3
+    const __m128 vb = _mm_loadu_ps(b + x);
+    const __m128 vc = _mm_loadu_ps(c + x);
+    // _mm_shuffle_ps(x, y, _MM_SHUFFLE(d, c, b, a)) = (x[a], x[b], y[c], y[d]).
+    const __m128 ab01 = _mm_unpacklo_ps(va, vb);                         // a0 b0 a1 b1
+    const __m128 ab23 = _mm_unpackhi_ps(va, vb);                         // a2 b2 a3 b3
+    const __m128 c0a1 = _mm_shuffle_ps(vc, va, _MM_SHUFFLE(1, 1, 0, 0)); // c0 c0 a1 a1
+    const __m128 b1c1 = _mm_shuffle_ps(vb, vc, _MM_SHUFFLE(1, 1, 1, 1)); // b1 b1 c1 c1
+    const __m128 c2a3 = _mm_shuffle_ps(vc, va, _MM_SHUFFLE(3, 3, 2, 2)); // c2 c2 a3 a3
+    const __m128 b3c3 = _mm_shuffle_ps(vb, vc, _MM_SHUFFLE(3, 3, 3, 3)); // b3 b3 c3 c3
+    float *p = o + 3 * x;
+    _mm_storeu_ps(p, _mm_shuffle_ps(ab01, c0a1, _MM_SHUFFLE(2, 0, 1, 0)));     // a0 b0 c0 a1
+    _mm_storeu_ps(p + 4, _mm_shuffle_ps(b1c1, ab23, _MM_SHUFFLE(1, 0, 2, 0))); // b1 c1 a2 b2
+    _mm_storeu_ps(p + 8, _mm_shuffle_ps(c2a3, b3c3, _MM_SHUFFLE(2, 0, 2, 0))); // c2 a3 b3 c3
+  }
+#endif
+  for (; x < n; ++x) {
+    o[3 * x] = a[x];
+    o[3 * x + 1] = b[x];
+    o[3 * x + 2] = c[x];
+  }
+}
+
+/*!
+  Fills a level in one pass over its rows: intensities (loadRow(y, out) writes the w intensities of row y into a
+  ring of three contiguous rows, rows loaded in order), central-difference gradients (dx, dy) and gradSq,
+  interleaved into level.color. When coarse is not null, the next level's intensities (2x2 means, floor division
+  of the size) are written there, contiguous, while the rows they need are in the ring. The level (3.7 MB at
+  640x480) is written once and never read back from memory; the next level reads a contiguous plane instead of
+  strided pixels. The arithmetic per pixel is the same as separate copy, gradient and downsampling passes.
+*/
+template <typename RowLoader>
+void fillLevel(PyramidLevel &level, std::vector<float> &scratch, RowLoader loadRow, float *coarse)
 {
   const int w = level.width;
   const int h = level.height;
-  Eigen::Vector3f *color = level.color.data();
-  float *gradSq = level.gradSq.data();
+  const int wc = w / 2;
+  const int hc = h / 2;
+  // Three intensity rows (a ring indexed by y % 3), then one row of dx and one of dy.
+  scratch.resize(5 * static_cast<size_t>(w));
+  const auto slot = [&scratch, w](int y) { return scratch.data() + static_cast<ptrdiff_t>(y % 3) * w; };
+  float *__restrict dxRow = scratch.data() + 3 * static_cast<ptrdiff_t>(w);
+  float *__restrict dyRow = dxRow + w;
+  const auto load = [&](int y) {
+    loadRow(y, slot(y));
+    if (coarse != nullptr && y % 2 == 1 && y / 2 < hc) {
+      const float *__restrict r0 = slot(y - 1);
+      const float *__restrict r1 = slot(y);
+      float *__restrict c = coarse + static_cast<ptrdiff_t>(y / 2) * wc;
+      for (int x = 0; x < wc; ++x) {
+        c[x] = kQuarter * (r0[2 * x] + r0[2 * x + 1] + r1[2 * x] + r1[2 * x + 1]);
+      }
+    }
+  };
+  load(0);
+  load(1);
+  float *out = level.color.data()->data(); // Vector3f is three packed floats: (I, dx, dy) per pixel
   for (int y = 0; y < h; ++y) {
+    if (y >= 1 && y + 1 < h) {
+      load(y + 1);
+    }
     // One-sided differences on the first and last row (step 1 instead of 2, hence scale 1).
     const int yUp = y > 0 ? y - 1 : y;
     const int yDown = y < h - 1 ? y + 1 : y;
     const float scaleY = (yDown - yUp) == 2 ? kCentralDifferenceScale : 1.f;
-    const Eigen::Vector3f *up = color + static_cast<ptrdiff_t>(yUp) * w;
-    const Eigen::Vector3f *down = color + static_cast<ptrdiff_t>(yDown) * w;
-    Eigen::Vector3f *row = color + static_cast<ptrdiff_t>(y) * w;
-    float *gRow = gradSq + static_cast<ptrdiff_t>(y) * w;
-
-    // First and last column: one-sided. (Two simple loops per row measured faster than one with border tests.)
-    row[0][1] = row[1][0] - row[0][0];
+    const float *__restrict up = slot(yUp);
+    const float *__restrict mid = slot(y);
+    const float *__restrict down = slot(yDown);
+    float *__restrict g = level.gradSq.data() + static_cast<ptrdiff_t>(y) * w;
+    // Separate simple loops over contiguous rows: each one vectorises.
+    dxRow[0] = mid[1] - mid[0]; // first and last column: one-sided
     for (int x = 1; x < w - 1; ++x) {
-      row[x][1] = kCentralDifferenceScale * (row[x + 1][0] - row[x - 1][0]);
+      dxRow[x] = kCentralDifferenceScale * (mid[x + 1] - mid[x - 1]);
     }
-    row[w - 1][1] = row[w - 1][0] - row[w - 2][0];
-
+    dxRow[w - 1] = mid[w - 1] - mid[w - 2];
     for (int x = 0; x < w; ++x) {
-      const float dy = scaleY * (down[x][0] - up[x][0]);
-      row[x][2] = dy;
-      gRow[x] = row[x][1] * row[x][1] + dy * dy;
+      dyRow[x] = scaleY * (down[x] - up[x]);
+      g[x] = dxRow[x] * dxRow[x] + dyRow[x] * dyRow[x];
     }
-  }
-}
-
-//! Level l+1 intensities as 2x2 means of level l (floor division of the size).
-void downsample(const PyramidLevel &fine, PyramidLevel &coarse)
-{
-  const int wf = fine.width;
-  for (int y = 0; y < coarse.height; ++y) {
-    const Eigen::Vector3f *r0 = fine.color.data() + static_cast<ptrdiff_t>(2 * y) * wf;
-    const Eigen::Vector3f *r1 = r0 + wf;
-    Eigen::Vector3f *out = coarse.color.data() + static_cast<ptrdiff_t>(y) * coarse.width;
-    for (int x = 0; x < coarse.width; ++x) {
-      out[x][0] = kQuarter * (r0[2 * x][0] + r0[2 * x + 1][0] + r1[2 * x][0] + r1[2 * x + 1][0]);
-    }
+    interleave(mid, dxRow, dyRow, w, out + 3 * static_cast<ptrdiff_t>(y) * w);
   }
 }
 } // namespace
@@ -149,16 +198,38 @@ template <typename T>
 void ImagePyramid::buildFrom(const vpImage<T> &I, const PinholeIntrinsics &K0, int maxLevels, int minCoarsestPixels)
 {
   prepareLevels(static_cast<int>(I.getWidth()), static_cast<int>(I.getHeight()), K0, maxLevels, minCoarsestPixels);
-  PyramidLevel &level0 = m_levels[0];
+  std::vector<float> scratch;
+  // Intensities of the level being filled (input) and of the next one (output), contiguous.
+  std::vector<float> planeIn, planeOut;
+  const auto coarsePlane = [this, &planeOut](int l) -> float * {
+    if (l + 1 >= m_numLevels) {
+      return nullptr;
+    }
+    const PyramidLevel &next = m_levels[static_cast<size_t>(l + 1)];
+    planeOut.resize(static_cast<size_t>(next.width) * static_cast<size_t>(next.height));
+    return planeOut.data();
+  };
   const T *src = I.bitmap;
-  const size_t n = level0.color.size();
-  for (size_t i = 0; i < n; ++i) {
-    level0.color[i][0] = static_cast<float>(src[i]);
-  }
-  computeGradients(level0);
+  const int w0 = m_levels[0].width;
+  fillLevel(
+      m_levels[0], scratch,
+      [src, w0](int y, float *row) {
+        const T *in = src + static_cast<ptrdiff_t>(y) * w0;
+        for (int x = 0; x < w0; ++x) {
+          row[x] = static_cast<float>(in[x]);
+        }
+      },
+      coarsePlane(0));
   for (int l = 1; l < m_numLevels; ++l) {
-    downsample(m_levels[static_cast<size_t>(l - 1)], m_levels[static_cast<size_t>(l)]);
-    computeGradients(m_levels[static_cast<size_t>(l)]);
+    planeIn.swap(planeOut);
+    const int w = m_levels[static_cast<size_t>(l)].width;
+    const float *in = planeIn.data();
+    fillLevel(
+        m_levels[static_cast<size_t>(l)], scratch,
+        [in, w](int y, float *row) {
+          std::copy(in + static_cast<ptrdiff_t>(y) * w, in + static_cast<ptrdiff_t>(y + 1) * w, row);
+        },
+        coarsePlane(l));
   }
 }
 
