@@ -159,6 +159,67 @@ TEST(ImagePyramid, EightBitOverloadMatchesFloatAndBuffersAreReused)
   EXPECT_EQ(pf.level(3).gradSq.data(), beforeCoarse);
 }
 
+// The definition, pass by pass and pixel by pixel: copy, 2x2 means, central differences (one-sided at the borders).
+std::vector<std::vector<float>> referenceLevels(const vpImage<float> &I, int levels)
+{
+  std::vector<std::vector<float>> out; // per level: I, dx, dy, gradSq per pixel
+  int w = static_cast<int>(I.getWidth()), h = static_cast<int>(I.getHeight());
+  std::vector<float> intensity(I.bitmap, I.bitmap + I.getSize());
+  for (int l = 0; l < levels; ++l) {
+    std::vector<float> level;
+    const auto at = [&](int x, int y) { return intensity[static_cast<size_t>(y * w + x)]; };
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const float dx = x == 0       ? at(1, y) - at(0, y)
+                         : x == w - 1 ? at(w - 1, y) - at(w - 2, y)
+                                      : 0.5f * (at(x + 1, y) - at(x - 1, y));
+        const float dy = y == 0       ? at(x, 1) - at(x, 0)
+                         : y == h - 1 ? at(x, h - 1) - at(x, h - 2)
+                                      : 0.5f * (at(x, y + 1) - at(x, y - 1));
+        level.insert(level.end(), {at(x, y), dx, dy, dx * dx + dy * dy});
+      }
+    }
+    out.push_back(level);
+    std::vector<float> coarse;
+    for (int y = 0; y < h / 2; ++y) {
+      for (int x = 0; x < w / 2; ++x) {
+        coarse.push_back(0.25f *
+                         (at(2 * x, 2 * y) + at(2 * x + 1, 2 * y) + at(2 * x, 2 * y + 1) + at(2 * x + 1, 2 * y + 1)));
+      }
+    }
+    intensity.swap(coarse);
+    w /= 2;
+    h /= 2;
+  }
+  return out;
+}
+
+TEST(ImagePyramid, EqualsThePixelByPixelDefinitionOnRandomImagesOfAnySize)
+{
+  // Widths that are not multiples of the vector width and odd sizes at every level, down to 2 pixels.
+  const int sizes[][2] = {{2, 2}, {3, 2}, {2, 3}, {5, 7}, {13, 11}, {37, 29}, {101, 83}, {1226, 370}};
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> value(0.f, 255.f);
+  for (const auto &size : sizes) {
+    vpImage<float> I(static_cast<unsigned int>(size[1]), static_cast<unsigned int>(size[0]));
+    for (unsigned int i = 0; i < I.getSize(); ++i) {
+      I.bitmap[i] = value(rng);
+    }
+    hslam::ImagePyramid pyr;
+    pyr.build(I, vgaIntrinsics(), kMaxLevels, 20);
+    const std::vector<std::vector<float>> ref = referenceLevels(I, pyr.numLevels());
+    for (int l = 0; l < pyr.numLevels(); ++l) {
+      const hslam::PyramidLevel &L = pyr.level(l);
+      int bad = 0;
+      for (size_t i = 0; i < L.color.size(); ++i) {
+        const float *r = &ref[static_cast<size_t>(l)][4 * i];
+        bad += (L.color[i][0] != r[0] || L.color[i][1] != r[1] || L.color[i][2] != r[2] || L.gradSq[i] != r[3]);
+      }
+      EXPECT_EQ(bad, 0) << size[0] << "x" << size[1] << " level " << l;
+    }
+  }
+}
+
 TEST(ImagePyramid, RejectsBadInput)
 {
   hslam::ImagePyramid pyr;
