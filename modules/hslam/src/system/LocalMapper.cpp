@@ -297,9 +297,9 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
           ? std::sqrt(summary.finalPhotometricEnergy / (static_cast<double>(summary.inlierResiduals) * kPatternSize))
           : 0.;
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << kf->id() << ": " << summary.activePoints << " points, "
-                                              << summary.iterations << " LM iterations, rmse " << rmse << ", "
-                                              << summary.outlierPoints << " outlier points, " << summary.totalMs
-                                              << " ms");
+                                              << summary.iterations << " LM iterations (" << summary.acceptedSteps
+                                              << " accepted), rmse " << rmse << ", " << summary.outlierPoints
+                                              << " outlier points, " << summary.totalMs << " ms");
   // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong.
   const int checked = m.keyframesInSegment - kFirstCheckedKeyframe;
   if (checked >= 0 && checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&
