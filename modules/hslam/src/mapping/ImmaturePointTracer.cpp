@@ -12,6 +12,9 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace hslam
 {
@@ -60,6 +63,84 @@ inline float huberEnergy(float residual, float threshold, float &weight)
   weight = huberWeight(absResidual, threshold);
   return weight * residual * residual * (2.f - weight);
 }
+
+/*!
+  Unweighted Huber SSD of the pattern (offsets) at (px, py) against the reference intensities: the discrete search's
+  inner loop. A pattern pixel outside \e level costs kOutOfImageEnergy; \e inside (the whole pattern is known to be
+  inside) spares the per-pixel test.
+*/
+inline float patternEnergy(const PyramidLevel &level, const std::array<Eigen::Vector2f, kPatternSize> &offsets,
+                           const std::array<float, kPatternSize> &reference, float px, float py, float threshold,
+                           bool inside)
+{
+  float energy = 0.f;
+  for (int k = 0; k < kPatternSize; ++k) {
+    const float x = px + offsets[static_cast<size_t>(k)].x();
+    const float y = py + offsets[static_cast<size_t>(k)].y();
+    if (!inside && !level.isInside(x, y, 0.f)) {
+      energy += kOutOfImageEnergy;
+      continue;
+    }
+    float weight;
+    energy += huberEnergy(level.interpolateIntensity(x, y) - reference[static_cast<size_t>(k)], threshold, weight);
+  }
+  return energy;
+}
+
+#ifdef __SSE2__
+/*!
+  Unweighted Huber SSD of the pattern at (px, py) (pattern offsets offX / offY, reference intensities ref), every
+  pattern pixel inside \e level: the discrete search's inner loop, four pixels per vector. Lane by lane the same
+  float operations as interpolateIntensity() and huberEnergy(), and the eight terms summed in the same order as the
+  scalar loop, so the energy is the same bit for bit.
+*/
+inline float patternEnergyInside(const PyramidLevel &level, const float *offX, const float *offY, const float *ref,
+                                 float px, float py, float threshold)
+{
+  const int w = level.width;
+  const Eigen::Vector3f *color = level.color.data();
+  const __m128 one = _mm_set1_ps(1.f);
+  const __m128 two = _mm_set1_ps(2.f);
+  const __m128 thr = _mm_set1_ps(threshold);
+  const __m128 signMask = _mm_set1_ps(-0.f);
+  alignas(16) float terms[kPatternSize];
+  static_assert(kPatternSize % 4 == 0, "the pattern is processed four pixels at a time");
+  for (int h = 0; h < kPatternSize; h += 4) {
+    const __m128 x = _mm_add_ps(_mm_set1_ps(px), _mm_loadu_ps(offX + h));
+    const __m128 y = _mm_add_ps(_mm_set1_ps(py), _mm_loadu_ps(offY + h));
+    const __m128i ix = _mm_cvttps_epi32(x); // truncation, as static_cast<int>
+    const __m128i iy = _mm_cvttps_epi32(y);
+    const __m128 du = _mm_sub_ps(x, _mm_cvtepi32_ps(ix));
+    const __m128 dv = _mm_sub_ps(y, _mm_cvtepi32_ps(iy));
+    alignas(16) int ixs[4], iys[4];
+    _mm_store_si128(reinterpret_cast<__m128i *>(ixs), ix);
+    _mm_store_si128(reinterpret_cast<__m128i *>(iys), iy);
+    alignas(16) float p00[4], p01[4], p10[4], p11[4];
+    for (int j = 0; j < 4; ++j) {
+      const Eigen::Vector3f *p = color + static_cast<ptrdiff_t>(iys[j]) * w + ixs[j];
+      p00[j] = p[0][0];
+      p01[j] = p[1][0];
+      p10[j] = p[w][0];
+      p11[j] = p[w + 1][0];
+    }
+    const __m128 notDu = _mm_sub_ps(one, du);
+    const __m128 top = _mm_add_ps(_mm_mul_ps(notDu, _mm_load_ps(p00)), _mm_mul_ps(du, _mm_load_ps(p01)));
+    const __m128 bottom = _mm_add_ps(_mm_mul_ps(notDu, _mm_load_ps(p10)), _mm_mul_ps(du, _mm_load_ps(p11)));
+    const __m128 value = _mm_add_ps(_mm_mul_ps(_mm_sub_ps(one, dv), top), _mm_mul_ps(dv, bottom));
+    const __m128 r = _mm_sub_ps(value, _mm_loadu_ps(ref + h));
+    const __m128 absR = _mm_andnot_ps(signMask, r);
+    // huberWeight: 1 inside the threshold, threshold / |r| outside (lanes inside never use the quotient).
+    const __m128 inside = _mm_cmple_ps(absR, thr);
+    const __m128 weight = _mm_or_ps(_mm_and_ps(inside, one), _mm_andnot_ps(inside, _mm_div_ps(thr, absR)));
+    _mm_store_ps(terms + h, _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(weight, r), r), _mm_sub_ps(two, weight)));
+  }
+  float energy = 0.f;
+  for (int k = 0; k < kPatternSize; ++k) {
+    energy += terms[k];
+  }
+  return energy;
+}
+#endif
 
 //! Slack of patternSegmentInside() for the rounding of accumulated positions, pixels.
 constexpr float kSegmentInsideSlack = 0.5f;
@@ -363,19 +444,21 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
   std::array<float, kMaxTraceSteps> errors;
   float bestU = 0.f, bestV = 0.f, bestEnergy = kNoEnergy;
   int bestIndex = -1;
+#ifdef __SSE2__
+  float offX[kPatternSize], offY[kPatternSize];
+  for (int k = 0; k < kPatternSize; ++k) {
+    offX[k] = offsets[static_cast<size_t>(k)].x();
+    offY[k] = offsets[static_cast<size_t>(k)].y();
+  }
+#endif
   for (int i = 0; i < numSteps; ++i) {
-    float energy = 0.f;
-    for (int k = 0; k < kPatternSize; ++k) {
-      const float x = ptx + offsets[static_cast<size_t>(k)].x();
-      const float y = pty + offsets[static_cast<size_t>(k)].y();
-      if (!segmentInside && !target.isInside(x, y, 0.f)) {
-        energy += kOutOfImageEnergy;
-        continue;
-      }
-      float weight;
-      energy +=
-          huberEnergy(target.interpolateIntensity(x, y) - reference[static_cast<size_t>(k)], m_huberThreshold, weight);
-    }
+#ifdef __SSE2__
+    const float energy = segmentInside
+                             ? patternEnergyInside(target, offX, offY, reference.data(), ptx, pty, m_huberThreshold)
+                             : patternEnergy(target, offsets, reference, ptx, pty, m_huberThreshold, segmentInside);
+#else
+    const float energy = patternEnergy(target, offsets, reference, ptx, pty, m_huberThreshold, segmentInside);
+#endif
     errors[static_cast<size_t>(i)] = energy;
     if (energy < bestEnergy) {
       bestU = ptx;
