@@ -7,11 +7,10 @@
 // the vignette is divided by its maximum and inverted once at load time, and the per-frame work is a table lookup
 // and one multiplication per pixel.
 
+#include "io/ImageCodec.h"
+
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamPhotometricCalibration.h>
-
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
 #include <array>
@@ -148,7 +147,7 @@ void buildInverseVignette(const T *samples, unsigned int width, unsigned int hei
   }
 }
 
-//! Read a vignette image at its own bit depth (ViSP 3.5's vpImageIo would reduce 16-bit PNGs to 8 bits).
+//! Read a vignette image at its own bit depth (8 or 16 bits; ViSP 3.5's vpImageIo would reduce 16-bit PNGs to 8).
 void readVignetteFile(const std::string &path, unsigned int width, unsigned int height, vpImage<float> &invV)
 {
   requireExisting(path, "vignette");
@@ -157,36 +156,24 @@ void readVignetteFile(const std::string &path, unsigned int width, unsigned int 
     msg << quoted(path) << ": expected vignette size " << width << "x" << height << " is empty";
     throw vpHSlamException(vpHSlamException::invalidArgument, msg.str());
   }
-  cv::Mat raw;
+  std::vector<std::uint16_t> samples;
+  unsigned int w = 0, h = 0;
+  int depth = 8; // not needed: the vignette is normalised to its maximum
   try {
-    // IMREAD_ANYDEPTH without IMREAD_ANYCOLOR: keep 16 bits, convert colour files to grey.
-    raw = cv::imread(path, cv::IMREAD_ANYDEPTH);
-  } catch (const cv::Exception &e) {
+    // 16-bit files keep their 16 bits; colour files are converted to grey.
+    const std::vector<unsigned char> bytes = io::readFileBytes(path);
+    io::decodeGreyAnyDepth(bytes.data(), bytes.size(), path, samples, w, h, depth);
+  } catch (const vpHSlamException &e) {
     throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           quoted(path) + ": cannot decode the vignette image (" + e.what() + ")");
+                           quoted(path) + ": cannot decode the vignette image (" + e.getStringMessage() + ")");
   }
-  if (raw.empty()) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, quoted(path) + ": cannot decode the vignette image");
-  }
-  if (raw.channels() != 1 || (raw.depth() != CV_8U && raw.depth() != CV_16U)) {
+  if (w != width || h != height) {
     std::ostringstream msg;
-    msg << quoted(path) << ": vignette must be an 8-bit or 16-bit grey image (OpenCV type " << raw.type() << ")";
-    throw vpHSlamException(vpHSlamException::unsupported, msg.str());
-  }
-  if (static_cast<unsigned int>(raw.cols) != width || static_cast<unsigned int>(raw.rows) != height) {
-    std::ostringstream msg;
-    msg << quoted(path) << ": vignette is " << raw.cols << "x" << raw.rows << " pixels, expected " << width << "x"
-        << height << " (the input image size)";
+    msg << quoted(path) << ": vignette is " << w << "x" << h << " pixels, expected " << width << "x" << height
+        << " (the input image size)";
     throw vpHSlamException(vpHSlamException::invalidCalibration, msg.str());
   }
-  if (!raw.isContinuous()) {
-    raw = raw.clone();
-  }
-  if (raw.depth() == CV_8U) {
-    buildInverseVignette(raw.ptr<unsigned char>(), width, height, quoted(path), invV);
-  } else {
-    buildInverseVignette(raw.ptr<unsigned short>(), width, height, quoted(path), invV);
-  }
+  buildInverseVignette(samples.data(), width, height, quoted(path), invV); // scale-free: 8 or 16 bits alike
 }
 } // namespace
 } // namespace hslam

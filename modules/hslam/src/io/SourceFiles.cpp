@@ -3,11 +3,9 @@
  */
 #include "io/SourceFiles.h"
 
-#include <visp3/core/vpImageConvert.h>
-#include <visp3/hslam/vpHSlamException.h>
-#include <visp3/io/vpImageIo.h>
+#include "io/ImageCodec.h"
 
-#include <opencv2/imgcodecs.hpp>
+#include <visp3/hslam/vpHSlamException.h>
 
 #include <algorithm>
 #include <cctype>
@@ -33,7 +31,7 @@ bool isJpeg(const std::vector<unsigned char> &bytes)
 }
 
 /*!
-  True when the JPEG's last scan is followed by the end-of-image marker. libjpeg (under both vpImageIo and OpenCV)
+  True when the JPEG's last scan is followed by the end-of-image marker. libjpeg
   decodes a truncated file without error, filling the missing part, so a cut file must be caught here. Inside
   entropy-coded data a 0xFF byte is always followed by 0x00 or a restart marker (T.81 B.1.1.5), hence FF D9 after
   the last FF DA can only be the real end of the image, and data appended after it (some cameras do) is harmless.
@@ -176,41 +174,13 @@ void readGreyImage(const std::string &path, vpImage<unsigned char> &I)
   if (!pathIsFile(path)) {
     throw vpHSlamException(vpHSlamException::fileNotFound, "image '" + path + "' does not exist");
   }
-  const std::string ext = lowerExtension(path);
-  if (ext == "jpg" || ext == "jpeg") {
-    std::ifstream in(path, std::ios::binary);
-    const std::vector<unsigned char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    requireCompleteJpeg(bytes, path);
-  }
-  try {
-    vpImageIo::read(I, path);
-  } catch (const vpException &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           "cannot decode image '" + path + "': " + e.getStringMessage());
-  } catch (const std::exception &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot decode image '" + path + "': " + e.what());
-  }
-  if (I.getWidth() == 0 || I.getHeight() == 0) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "image '" + path + "' decoded to an empty image");
-  }
+  decodeGreyImage(readFileBytes(path), path, I);
 }
 
 void decodeGreyImage(const std::vector<unsigned char> &bytes, const std::string &name, vpImage<unsigned char> &I)
 {
   requireCompleteJpeg(bytes, name);
-  cv::Mat grey;
-  try {
-    // IMREAD_GRAYSCALE: colour files converted like the folder readers do, 16-bit files reduced to 8 bits.
-    grey = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
-  } catch (const cv::Exception &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot decode image '" + name + "': " + e.what());
-  }
-  if (grey.empty() || grey.type() != CV_8UC1) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           "cannot decode image '" + name + "' (" + std::to_string(bytes.size()) +
-                               " bytes): not a complete image file in a format OpenCV reads");
-  }
-  vpImageConvert::convert(grey, I);
+  decodeGrey8(bytes.data(), bytes.size(), name, I);
 }
 
 std::vector<TextLine> readListLines(const std::string &path, const std::string &what)

@@ -33,7 +33,8 @@ std::string lowerExtension(const std::string &name);
 bool pathIsDirectory(const std::string &path);
 bool pathIsFile(const std::string &path);
 
-//! True for the still-image extensions the readers accept (png, jpg, jpeg, pgm, ppm, bmp, tif, tiff).
+//! True for the still-image extensions the readers list (png, jpg, jpeg, pgm, ppm, bmp, tif, tiff). The module
+//! decodes JPEG, PNG, PGM and PPM (io/ImageCodec.h); a BMP or TIFF frame gives an error that says to convert it.
 VISP_EXPORT bool hasImageExtension(const std::string &name);
 //! True for the video-file extensions handed to vpVideoReader (avi, mp4, mov, mkv, mpg, ...).
 VISP_EXPORT bool hasVideoExtension(const std::string &name);
@@ -46,14 +47,14 @@ VISP_EXPORT bool hasVideoExtension(const std::string &name);
 VISP_EXPORT std::vector<std::string> listImageFiles(const std::string &folder);
 
 /*!
-  Read one image as 8-bit grey (ViSP's readers convert colour files).
+  Read one image (JPEG, PNG, PGM or PPM) as 8-bit grey, colour files converted as OpenCV's IMREAD_GRAYSCALE does.
   \exception vpHSlamException::fileNotFound when missing, fileUnreadable when it cannot be decoded, is empty, or is
   a JPEG cut before its end-of-image marker (which libjpeg would decode without error), all naming \e path.
 */
 VISP_EXPORT void readGreyImage(const std::string &path, vpImage<unsigned char> &I);
 
 /*!
-  Decode an encoded image held in memory (PNG, JPEG, ... as read from an archive) to 8-bit grey.
+  Decode an encoded image held in memory (JPEG, PNG, PGM or PPM, as read from an archive) to 8-bit grey.
   \param bytes : the encoded file.
   \param name : what to call it in messages ("images.zip:00012.png").
   \exception vpHSlamException::fileUnreadable naming \e name when it cannot be decoded or is a truncated JPEG.

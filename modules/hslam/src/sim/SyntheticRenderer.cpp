@@ -1,9 +1,10 @@
 #include "sim/SyntheticRenderer.h"
 
+#include "io/SourceFiles.h"
+
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpIoTools.h>
 #include <visp3/hslam/vpHSlamException.h>
-#include <visp3/io/vpImageIo.h>
 
 #include <algorithm>
 #include <cmath>
@@ -75,8 +76,8 @@ void SyntheticRenderer::load(const std::string &imagesDir)
     }
     vpImage<unsigned char> I;
     try {
-      vpImageIo::read(I, path);
-    } catch (const vpException &) {
+      io::readGreyImage(path, I);
+    } catch (const vpHSlamException &) {
       continue; // an unreadable photograph is replaced like a missing one
     }
     Texture T;

@@ -1,5 +1,6 @@
 #include <visp3/hslam/vpHSlamSyntheticScene.h>
 
+#include "io/ImageCodec.h"
 #include "sim/SyntheticRenderer.h"
 #include "sim/SyntheticTrajectory.h"
 
@@ -8,7 +9,6 @@
 #include <visp3/core/vpQuaternionVector.h>
 #include <visp3/core/vpXmlParserCamera.h>
 #include <visp3/hslam/vpHSlamException.h>
-#include <visp3/io/vpImageIo.h>
 
 #include <algorithm>
 #include <cmath>
@@ -344,10 +344,9 @@ void vpHSlamSyntheticScene::writeSequence(const std::string &dir) const
     render(i, I);
     const std::string imagePath = dir + "/" + name;
     try {
-      vpImageIo::write(I, imagePath);
-    } catch (const vpException &e) {
-      throw vpHSlamException(vpHSlamException::invalidArgument,
-                             "synthetic scene: cannot write image '" + imagePath + "': " + e.getStringMessage());
+      hslam::io::writePng(imagePath, I);
+    } catch (const vpHSlamException &e) {
+      throw vpHSlamException(vpHSlamException::invalidArgument, "synthetic scene: " + e.getStringMessage());
     }
     const double t = getTimestamp(i);
     std::snprintf(line, sizeof(line), "%.6f %s\n", t, name);
@@ -399,10 +398,9 @@ void vpHSlamSyntheticScene::writeSequence(const std::string &dir) const
     }
     const std::string vignetteFile = dir + "/vignette.png";
     try {
-      vpImageIo::write(V, vignetteFile);
-    } catch (const vpException &e) {
-      throw vpHSlamException(vpHSlamException::invalidArgument,
-                             "synthetic scene: cannot write image '" + vignetteFile + "': " + e.getStringMessage());
+      hslam::io::writePng(vignetteFile, V);
+    } catch (const vpHSlamException &e) {
+      throw vpHSlamException(vpHSlamException::invalidArgument, "synthetic scene: " + e.getStringMessage());
     }
   }
 }
