@@ -29,7 +29,8 @@ jobs=${JOBS:-$(nproc)}
 # targets of `test`; ccache lets the sanitizer pass re-use the normal build's test programs; doxygen the
 # documentation test, xvfb and xauth the live-window test (a virtual X server).
 packages=(g++ cmake make pkg-config ccache libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
-  libbenchmark-dev libv4l-dev libzip-dev zlib1g-dev visp-images-data clang libclang-rt-dev libomp-dev doxygen xvfb xauth)
+  libbenchmark-dev libv4l-dev libzip-dev zlib1g-dev libjpeg-dev libpng-dev visp-images-data clang libclang-rt-dev
+  libomp-dev doxygen xvfb xauth)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()

@@ -17,12 +17,12 @@
 #include <visp3/gui/vpDisplayX.h>
 #include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamImageIo.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
 #include <visp3/hslam/vpHSlamLiveView.h>
 #include <visp3/hslam/vpHSlamLog.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 #include <visp3/hslam/vpHSlamRectifier.h>
-#include <visp3/io/vpImageIo.h>
 
 #include "dataset/DatasetArguments.h"
 #include "dataset/DatasetMapOutput.h"
@@ -292,7 +292,7 @@ int run(const Arguments &args)
     try {
       vpImage<vpRGBa> shot;
       vpDisplay::getImage(canvas, shot);
-      vpImageIo::write(shot, args.screenshot);
+      vpHSlamImageIo::writePng(args.screenshot, shot);
       std::cout << "screenshot: " << args.screenshot << std::endl;
     } catch (const vpException &e) {
       std::cerr << "warning: cannot save the screenshot '" << args.screenshot << "': " << e.getStringMessage()

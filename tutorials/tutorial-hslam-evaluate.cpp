@@ -6,9 +6,9 @@
 #include <visp3/core/vpImage.h>
 #include <visp3/core/vpIoTools.h>
 #include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamImageIo.h>
 #include <visp3/hslam/vpHSlamTrajectory.h>
 #include <visp3/hslam/vpHSlamTrajectoryEvaluator.h>
-#include <visp3/io/vpImageIo.h>
 
 #include <cmath>
 #include <cstdio>
@@ -233,7 +233,7 @@ int run(const Options &options)
     vpImage<vpRGBa> I;
     vpHSlamTrajectoryEvaluator::drawTopView(I, groundTruthSpan(groundTruth, evaluator),
                                             evaluator.getAlignedEstimate(ate), caption);
-    vpImageIo::write(I, options.plot);
+    vpHSlamImageIo::writePng(options.plot, I);
     std::cout << "# plot written to " << options.plot << std::endl;
   }
   return EXIT_SUCCESS;

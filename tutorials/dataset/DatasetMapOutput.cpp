@@ -3,7 +3,7 @@
 
 #include <visp3/core/vpImageDraw.h>
 #include <visp3/hslam/vpHSlamException.h>
-#include <visp3/io/vpImageIo.h>
+#include <visp3/hslam/vpHSlamImageIo.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -103,7 +103,7 @@ void writeMapPng(const std::string &path, const std::vector<vpHSlam::MapPoint> &
   }
   vpImageDraw::drawCircle(I, pixel(plane(path3.front())), 6, vpColor(220, 30, 30), 2);
   try {
-    vpImageIo::write(I, path);
+    vpHSlamImageIo::writePng(path, I);
   } catch (const vpException &e) {
     throw vpHSlamException(vpHSlamException::fileUnreadable,
                            "cannot write the map picture '" + path + "': " + e.getStringMessage());

@@ -3,6 +3,8 @@
  */
 #include "io/ImageCodec.h"
 
+#include <visp3/core/vpImageConvert.h>
+
 #include <cctype>
 #include <csetjmp>
 #include <cstdio>
@@ -23,7 +25,7 @@ namespace
 constexpr std::size_t kMessageSize = 200;
 //! Largest side accepted, pixels: a corrupt header must not ask for terabytes.
 constexpr unsigned long kMaxSide = 1u << 16;
-//! OpenCV's fixed-point BT.601 weights for colour PNM files (cvtColor BGR2GRAY): (R, G, B) / 2^14, rounded.
+//! 16-bit colour PNM files (rare): OpenCV's fixed-point BT.601 weights (cvtColor BGR2GRAY), (R, G, B) / 2^14.
 constexpr unsigned kGreyWeightR = 4899, kGreyWeightG = 9617, kGreyWeightB = 1868, kGreyShift = 14;
 
 [[noreturn]] void fail(const std::string &name, const std::string &what)
@@ -145,6 +147,7 @@ bool decodePng(const unsigned char *data, std::size_t size, vpImage<unsigned cha
   // Everything with a destructor is constructed before setjmp: a longjmp must not skip one.
   std::vector<png_bytep> rows;
   vpImage<unsigned char> tmp;
+  std::vector<unsigned char> rgb;
   if (setjmp(png_jmpbuf(png)) != 0) {
     png_destroy_read_struct(&png, &info, nullptr);
     return false;
@@ -170,7 +173,11 @@ bool decodePng(const unsigned char *data, std::size_t size, vpImage<unsigned cha
   if ((colorType & PNG_COLOR_MASK_COLOR) == 0 && depth < 8) {
     png_set_expand_gray_1_2_4_to_8(png);
   }
-  png_set_rgb_to_gray(png, 1, 0.299, 0.587);
+  // 8-bit colour: RGB rows converted by ViSP's vpImageConvert::RGBToGrey, as vpImageIo::read did for PNG files.
+  const bool viSPGrey = !keep16 && (colorType & PNG_COLOR_MASK_COLOR) != 0;
+  if (!viSPGrey) {
+    png_set_rgb_to_gray(png, 1, 0.299, 0.587);
+  }
   png_set_interlace_handling(png);
   png_read_update_info(png, info);
   width = w;
@@ -186,10 +193,22 @@ bool decodePng(const unsigned char *data, std::size_t size, vpImage<unsigned cha
   } else {
     vpImage<unsigned char> &I = out8 != nullptr ? *out8 : tmp;
     I.resize(h, w);
-    for (png_uint_32 y = 0; y < h; ++y) {
-      rows[y] = I[y];
+    if (viSPGrey) {
+      if (png_get_channels(png, info) != 3) {
+        png_error(png, "unexpected PNG colour layout");
+      }
+      rgb.resize(static_cast<std::size_t>(w) * h * 3);
+      for (png_uint_32 y = 0; y < h; ++y) {
+        rows[y] = rgb.data() + static_cast<std::size_t>(y) * w * 3;
+      }
+      png_read_image(png, rows.data());
+      vpImageConvert::RGBToGrey(rgb.data(), I.bitmap, static_cast<unsigned int>(w) * h);
+    } else {
+      for (png_uint_32 y = 0; y < h; ++y) {
+        rows[y] = I[y];
+      }
+      png_read_image(png, rows.data());
     }
-    png_read_image(png, rows.data());
     if (out16 != nullptr) {
       out16->assign(I.bitmap, I.bitmap + I.getSize());
     }
@@ -281,6 +300,14 @@ void decodePnm(const unsigned char *data, std::size_t size, const std::string &n
   fileDepth = bytesPerSample == 2 ? 16 : 8;
   if (!colour) {
     samples.swap(raw);
+    return;
+  }
+  if (bytesPerSample == 1) {
+    // 8-bit colour: ViSP's vpImageConvert::RGBToGrey, as vpImageIo::read did for PPM files.
+    std::vector<unsigned char> rgb(raw.begin(), raw.end());
+    std::vector<unsigned char> grey(static_cast<std::size_t>(w) * h);
+    vpImageConvert::RGBToGrey(rgb.data(), grey.data(), static_cast<unsigned int>(w * h));
+    samples.assign(grey.begin(), grey.end());
     return;
   }
   samples.resize(static_cast<std::size_t>(w) * h);

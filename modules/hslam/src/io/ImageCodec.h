@@ -22,10 +22,11 @@ namespace io
   Why the module decodes images itself instead of through ViSP's vpImageIo or OpenCV's imgcodecs: those two link
   OpenCV's image and video I/O, which on Debian pull in about 200 more shared libraries (GDAL, GStreamer, FFmpeg,
   Qt, ...). Loading and relocating them costs every program that links the module about 0.2 s of CPU at start-up and
-  about 60 MB of resident memory, for formats a SLAM system does not read. The decoding rules follow OpenCV's
-  IMREAD_GRAYSCALE exactly (same libjpeg and libpng settings, same colour weights), so a frame decodes to the same
-  pixels as before; a unit test checks it against cv::imread on the shared sequences. EXIF orientation tags are not
-  applied (camera frames do not carry them).
+  about 60 MB of resident memory, for formats a SLAM system does not read. The grey conversion is the one
+  vpImageIo::read applied before (libjpeg's Y channel for JPEG, ViSP's vpImageConvert::RGBToGrey for 8-bit colour
+  PNG and PPM), so a frame decodes to the same pixels as before; a unit test checks it against vpImageIo::read on
+  every image of the shared sequences and on generated files. EXIF orientation tags are not applied (camera frames
+  do not carry them).
 */
 
 //! Encoded image formats recognised from their first bytes.
@@ -38,9 +39,9 @@ VISP_EXPORT ImageFormat detectImageFormat(const unsigned char *data, std::size_t
 VISP_EXPORT std::vector<unsigned char> readFileBytes(const std::string &path);
 
 /*!
-  Decode an encoded JPEG, PNG, PGM or PPM image to 8-bit grey: colour converted with ITU-R BT.601 weights (libjpeg's
-  Y channel, libpng's rgb_to_gray(0.299, 0.587), OpenCV's fixed-point weights for PPM), 16-bit samples reduced to
-  their high byte, alpha dropped, palettes expanded.
+  Decode an encoded JPEG, PNG, PGM or PPM image to 8-bit grey: colour converted as vpImageIo::read does (libjpeg's
+  Y channel for JPEG, vpImageConvert::RGBToGrey for 8-bit PNG and PPM), 16-bit samples reduced to their high byte,
+  alpha dropped, palettes expanded.
   \exception vpHSlamException::fileUnreadable naming \e name when the data is not a complete image in one of these
   formats.
 */

@@ -19,7 +19,7 @@ namespace hslam
   seconds, Options::frameRate in Hz. A camera file is required: Options::cameraFile, else camera.txt, camera.xml or
   camera.yaml beside the images.
 
-  Files are read one by one with vpImageIo (never through vpVideoReader, which skips unreadable frames).
+  Files are read one by one with io::readGreyImage() (never through vpVideoReader, which skips unreadable frames).
 */
 class ImageSequenceSource : public IndexedImageSource
 {

@@ -28,8 +28,8 @@ struct IndexedFrame {
 
   A derived reader parses its lists, loads m_camera (and m_photometric) and hands the full frame list to
   setFrames(), which checks it once (timestamps strictly increasing, every selected file present), applies
-  Options::startFrame / maxFrames and fixes the frame rate. acquire() then reads each file with vpImageIo (or, for
-  frames inside an archive, through readArchivedImage()): a frame is never skipped (unlike vpVideoReader), an
+  Options::startFrame / maxFrames and fixes the frame rate. acquire() then reads each file with io::readGreyImage() (or,
+  for frames inside an archive, through readArchivedImage()): a frame is never skipped (unlike vpVideoReader), an
   unreadable file or a size different from the calibration throws.
 */
 class IndexedImageSource : public vpHSlamImageSource

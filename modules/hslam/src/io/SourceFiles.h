@@ -47,7 +47,7 @@ VISP_EXPORT bool hasVideoExtension(const std::string &name);
 VISP_EXPORT std::vector<std::string> listImageFiles(const std::string &folder);
 
 /*!
-  Read one image (JPEG, PNG, PGM or PPM) as 8-bit grey, colour files converted as OpenCV's IMREAD_GRAYSCALE does.
+  Read one image (JPEG, PNG, PGM or PPM) as 8-bit grey, colour files converted as vpImageIo::read does.
   \exception vpHSlamException::fileNotFound when missing, fileUnreadable when it cannot be decoded, is empty, or is
   a JPEG cut before its end-of-image marker (which libjpeg would decode without error), all naming \e path.
 */

@@ -6,10 +6,7 @@
 #include "io/SourceFiles.h"
 #include "io/TumRgbdSource.h"
 
-#include <visp3/core/vpImageConvert.h>
 #include <visp3/hslam/vpHSlamException.h>
-
-#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <sstream>
@@ -36,19 +33,10 @@ VideoSource::VideoSource(const std::string &path, const vpHSlamImageSource::Opti
   m_frameRate = options.frameRate;
   m_maxFrames = options.maxFrames;
 
-  // OpenCV's reader, not vpVideoReader: ViSP 3.5's reader keeps returning the last decoded image when a container
-  // does not store its frame count (e.g. an MPEG-1 stream), which would feed the same frame forever.
-  try {
-    // FFmpeg only: OpenCV's other backends (GStreamer, image sequences) print to stderr on files they cannot
-    // play, and library code stays silent.
-    m_capture.open(path, cv::CAP_FFMPEG);
-  } catch (const cv::Exception &e) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot open video '" + path + "': " + e.what());
-  }
-  if (!m_capture.isOpened()) {
-    throw vpHSlamException(vpHSlamException::fileUnreadable,
-                           "cannot open video '" + path + "': not a video this build of OpenCV can decode");
-  }
+  // OpenCV's reader (in the plug-in), not vpVideoReader: ViSP 3.5's reader keeps returning the last decoded image
+  // when a container does not store its frame count (e.g. an MPEG-1 stream), which would feed the same frame
+  // forever.
+  m_decoder = io::openVideoDecoder(path);
   if (!readFrame(m_first)) {
     throw vpHSlamException(vpHSlamException::fileUnreadable, "video '" + path + "' has no decodable frame");
   }
@@ -56,7 +44,7 @@ VideoSource::VideoSource(const std::string &path, const vpHSlamImageSource::Opti
   // The first frame gives the size to calibration formats that do not store it (KITTI calib.txt).
   m_camera = vpHSlamCamera::load(m_cameraFile, m_first.getWidth(), m_first.getHeight());
   // The container's frame count is a hint only (some formats estimate it); -1 when it has none.
-  const double stored = m_capture.get(cv::CAP_PROP_FRAME_COUNT);
+  const double stored = m_decoder->storedFrameCount();
   if (stored >= 2. && stored < 1e9) { // MPEG-1 streams report 1
     long count = static_cast<long>(stored) - static_cast<long>(options.startFrame);
     if (options.maxFrames > 0) {
@@ -76,18 +64,16 @@ VideoSource::VideoSource(const std::string &path, const vpHSlamImageSource::Opti
 
 bool VideoSource::readFrame(vpImage<unsigned char> &I)
 {
-  cv::Mat frame;
-  if (!m_capture.read(frame) || frame.empty()) {
+  std::string error;
+  switch (m_decoder->read(I, error)) {
+  case io::VideoDecoder::Status::frame:
+    return true;
+  case io::VideoDecoder::Status::end:
     return false;
+  case io::VideoDecoder::Status::error:
+    break;
   }
-  if (frame.channels() == 1) {
-    vpImageConvert::convert(frame, I);
-  } else {
-    cv::Mat grey;
-    cv::cvtColor(frame, grey, frame.channels() == 4 ? cv::COLOR_BGRA2GRAY : cv::COLOR_BGR2GRAY);
-    vpImageConvert::convert(grey, I);
-  }
-  return true;
+  throw vpHSlamException(vpHSlamException::fileUnreadable, error);
 }
 
 bool VideoSource::decodeNext(vpImage<unsigned char> &I)
@@ -102,8 +88,9 @@ bool VideoSource::decodeNext(vpImage<unsigned char> &I)
     bool decoded = false;
     try {
       decoded = readFrame(I);
-    } catch (const cv::Exception &e) {
-      const std::string message = "video '" + m_path + "', frame " + std::to_string(m_fileIndex) + ": " + e.what();
+    } catch (const vpHSlamException &e) {
+      const std::string message =
+          "video '" + m_path + "', frame " + std::to_string(m_fileIndex) + ": " + e.getStringMessage();
       ++m_fileIndex; // consumed: the next frame keeps its own index and timestamp
       throw vpHSlamException(vpHSlamException::fileUnreadable, message);
     }

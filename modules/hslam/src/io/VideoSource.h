@@ -1,23 +1,25 @@
 /*
  * H-SLAM for ViSP.
  */
-//! \file VideoSource.h  Video files through vpVideoReader.
+//! \file VideoSource.h  Video files, decoded by the video plug-in (io/VideoDecoder.h).
 #ifndef HSLAM_IO_VIDEO_SOURCE_H
 #define HSLAM_IO_VIDEO_SOURCE_H
 
 #include <visp3/hslam/vpHSlamImageSource.h>
 
-#include <opencv2/videoio.hpp>
+#include "io/VideoDecoder.h"
+
+#include <memory>
 
 #include <string>
 
 namespace hslam
 {
 /*!
-  A video file (avi, mp4, ...) decoded by vpVideoReader (OpenCV). Frame i of the file is at i / frameRate
-  seconds, Options::frameRate in Hz. A camera file is required: Options::cameraFile, else camera.txt, camera.xml or
-  camera.yaml beside the video. A frame of another size than the calibration throws; the end of the stream (or a
-  frame the decoder cannot produce) ends the sequence.
+  A video file (avi, mp4, ...) decoded by the video plug-in (OpenCV, FFmpeg; io/VideoDecoder.h). Frame i of the file is
+  at i / frameRate seconds, Options::frameRate in Hz. A camera file is required: Options::cameraFile, else camera.txt,
+  camera.xml or camera.yaml beside the video. A frame of another size than the calibration throws; the end of the stream
+  (or a frame the decoder cannot produce) ends the sequence.
 */
 class VideoSource : public vpHSlamImageSource
 {
@@ -39,7 +41,7 @@ private:
   bool readFrame(vpImage<unsigned char> &I);
 
   std::string m_path, m_cameraFile;
-  cv::VideoCapture m_capture;
+  std::unique_ptr<io::VideoDecoder> m_decoder;
   vpHSlamCamera m_camera;
   vpHSlamPhotometricCalibration m_photometric;
   vpImage<unsigned char> m_first; //!< first frame, read for the size and delivered first

@@ -34,9 +34,10 @@
   refused as truncated (a line cut inside its last number would still parse). The end of a sequence is not an
   error: acquire() returns false.
 
-  Dataset images are read one by one with vpImageIo (TUM monoVO's images.zip: decompressed with libzip and decoded
-  in memory), never through vpVideoReader, which silently skips unreadable frames; vpVideoReader serves video files
-  only.
+  Dataset images are read one by one with vpHSlamImageIo's decoder (JPEG, PNG, PGM, PPM; TUM monoVO's images.zip:
+  decompressed with libzip and decoded in memory), never through vpVideoReader, which silently skips unreadable
+  frames. Video files are decoded by OpenCV (FFmpeg) in a plug-in, libvisp_hslam_video, loaded when the first video
+  is opened.
 
   Threading: a source is used from one thread at a time.
 
@@ -70,7 +71,7 @@ public:
                    //!< extension: optional pcalib.txt / vignette.png and times.txt (id time exposure_ms per frame)
     formatKitti,   //!< KITTI odometry: image_0/, times.txt, calib.txt (P0); size from the first image
     formatImages,  //!< image folder (sorted by name) or printf pattern; camera file and frame rate required
-    formatVideo,   //!< video file through vpVideoReader, with a camera file and a frame rate
+    formatVideo,   //!< video file (OpenCV/FFmpeg plug-in), with a camera file and a frame rate
     formatV4l2     //!< live camera through vpV4l2Grabber ("/dev/videoN")
   };
 

@@ -34,7 +34,7 @@
   vpHSlamVocabularyTrainer trainer;           // k = 10, L = 6, 1000 features per image
   for (const std::string &file : files) {
     vpImage<unsigned char> I;
-    vpImageIo::read(I, file);
+    vpHSlamImageIo::readGrey(file, I);
     trainer.addImage(I);
   }
   vpHSlamVocabulary voc = trainer.train();
