@@ -33,10 +33,12 @@ constexpr unsigned kGreyWeightR = 4899, kGreyWeightG = 9617, kGreyWeightB = 1868
   throw vpHSlamException(vpHSlamException::fileUnreadable, "cannot decode image '" + name + "': " + what);
 }
 
+//! Copy \e in into \e out (kMessageSize bytes), cut if longer, always terminated.
 void copyMessage(char *out, const char *in)
 {
-  std::strncpy(out, in, kMessageSize - 1);
-  out[kMessageSize - 1] = '\0';
+  const std::size_t n = strnlen(in, kMessageSize - 1);
+  std::memcpy(out, in, n);
+  out[n] = '\0';
 }
 
 // ---- JPEG (libjpeg). The error handler jumps back with the message; warnings (corrupt data that libjpeg
