@@ -268,23 +268,31 @@ std::vector<int> WindowOptimizer::keyframesToMarginalize() const
   return out;
 }
 
-void WindowOptimizer::evaluateCandidate(int host, const PointObservation &obs, double &energy, double &H, double &b,
-                                        int &inliers) const
+void WindowOptimizer::setCandidatePairs(int host, CandidatePairs &pairs) const
+{
+  const Frame &fh = *m_frames[static_cast<size_t>(host)].kf->frame;
+  const KeyframeState &sh = m_states[static_cast<size_t>(host)];
+  for (size_t t = 0; t < m_frames.size(); ++t) {
+    if (static_cast<int>(t) != host) {
+      const KeyframeState &st = m_states[t];
+      pairs[t].set(sh.cMw, sh.a, sh.b, fh.exposure, st.cMw, st.a, st.b, m_frames[t].kf->frame->exposure);
+    }
+  }
+}
+
+void WindowOptimizer::evaluateCandidate(int host, const CandidatePairs &pairs, const PointObservation &obs,
+                                        double &energy, double &H, double &b, int &inliers) const
 {
   energy = H = b = 0.;
   inliers = 0;
-  const Frame &fh = *m_frames[static_cast<size_t>(host)].kf->frame;
-  const KeyframeState &sh = m_states[static_cast<size_t>(host)];
-  FramePairPrecalc pair;
   PatternLinearization lin;
   for (size_t t = 0; t < m_frames.size(); ++t) {
     if (static_cast<int>(t) == host) {
       continue;
     }
-    const Frame &ft = *m_frames[t].kf->frame;
-    pair.set(sh.cMw, sh.a, sh.b, fh.exposure, m_states[t].cMw, m_states[t].a, m_states[t].b, ft.exposure);
     double e = 0.;
-    const ResidualState state = evaluatePattern(m_settings, ft.pyramid.level(0), pair, obs, e, &lin);
+    const ResidualState state =
+        evaluatePattern(m_settings, m_frames[t].kf->frame->pyramid.level(0), pairs[t], obs, e, &lin);
     energy += e;
     if (state != ResidualState::inlier) {
       continue;
@@ -321,9 +329,12 @@ PointActivationResult WindowOptimizer::optimizeNewPoint(int hostKeyframeId, doub
   obs.idepth = idepth;
   obs.patch = patch.data();
   obs.weight = weight.data();
+  // The window's states do not change while one point is optimised: its (host, target) pairs are set once.
+  CandidatePairs pairs;
+  setCandidatePairs(host, pairs);
   // Photometric terms from evaluateCandidate, plus the prior of a re-used point (Hp = photometric Hessian alone).
   auto evaluate = [&](const PointObservation &o, double &e, double &H, double &b, double &Hp, int &in) {
-    evaluateCandidate(host, o, e, H, b, in);
+    evaluateCandidate(host, pairs, o, e, H, b, in);
     Hp = H;
     if (priorWeight > 0.) {
       const double d = o.idepth - priorIdepth;

@@ -52,6 +52,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -212,8 +213,11 @@ private:
   void finalizeOutliers(OptimizationSummary &summary);
   void removePointsIf(const std::vector<char> &remove);
   void remapAfterFrameRemoval(int removed);
-  void evaluateCandidate(int host, const PointObservation &obs, double &energy, double &H, double &b,
-                         int &inliers) const;
+  //! (host, target) pairs of a candidate point, indexed by target (the host's entry is unused).
+  using CandidatePairs = std::array<FramePairPrecalc, kMaxWindowKeyframes>;
+  void setCandidatePairs(int host, CandidatePairs &pairs) const;
+  void evaluateCandidate(int host, const CandidatePairs &pairs, const PointObservation &obs, double &energy, double &H,
+                         double &b, int &inliers) const;
 
   vpHSlamParameters::Mapper m_mapper;
   PhotometricSettings m_settings;
