@@ -45,12 +45,8 @@ constexpr int kCoarseMinResiduals = 20;
 //! Flow indicators sample every n-th level-0 point (DSO: i % 32 == 0) and divide by (count + 0.1).
 constexpr int kFlowSampleStride = 32;
 constexpr double kFlowSampleRegulariser = 0.1;
-//! Reference pixels closer than this to the border are not used (DSO: 2 <= x < w - 2).
-constexpr int kReferenceBorder = 2;
 //! Warped points must have this margin to the border of the new image (DSO: 2 < Ku < w - 3).
 constexpr float kTargetBorder = 2.f;
-//! Levels below this dilate the inverse-depth map diagonally, coarser ones along the axes (DSO).
-constexpr int kDiagonalDilationLevels = 2;
 /*!
   DSO's variable scaling of the 8-dim step (SCALE_XI_ROT = 1 on the first three twist entries, SCALE_XI_TRANS =
   0.5 on the last three, SCALE_A = 10, SCALE_B = 1000): only the convergence test and the affine priors see it,
@@ -97,137 +93,6 @@ CoarseTracker::CoarseTracker(const vpHSlamParameters::Tracker &params, bool phot
   // DSO starts with a large "last RMSE" so the first frame accepts its first good hypothesis.
   constexpr double kInitialLastRmse = 100.;
   m_lastRmse.fill(kInitialLastRmse);
-}
-
-void CoarseTracker::setReference(const Frame &refKf, const std::vector<CoarseTrackerPoint> &points)
-{
-  const ImagePyramid &pyr = refKf.pyramid;
-  if (pyr.numLevels() < 1 || pyr.numLevels() > kCoarseTrackerMaxLevels) {
-    throwError(vpHSlamException::invalidArgument, __LINE__,
-               "reference pyramid has " + std::to_string(pyr.numLevels()) + " levels, expected 1.." +
-                   std::to_string(kCoarseTrackerMaxLevels));
-  }
-  m_numLevels = pyr.numLevels();
-  m_K0 = pyr.level(0).K;
-  m_features.clear();
-  m_refAffine = refKf.affine;
-  m_refExposure = refKf.exposure;
-  m_firstRmse = nan();
-  for (int l = 0; l < m_numLevels; ++l) {
-    const PyramidLevel &src = pyr.level(l);
-    LevelData &dst = m_levels[static_cast<size_t>(l)];
-    dst.width = src.width;
-    dst.height = src.height;
-    dst.K = src.K;
-    const size_t n = static_cast<size_t>(src.width) * static_cast<size_t>(src.height);
-    dst.idepthMap.assign(n, 0.f);
-    dst.weightMap.assign(n, 0.f);
-    dst.weightBackup.resize(n);
-  }
-  buildDepthMaps(points);
-
-  // Residual point lists (SoA), level by level, from the normalised maps.
-  int maxPoints = 0;
-  for (int l = 0; l < m_numLevels; ++l) {
-    LevelData &L = m_levels[static_cast<size_t>(l)];
-    const PyramidLevel &refLevel = pyr.level(l);
-    const size_t n = L.idepthMap.size();
-    L.pu.resize(n);
-    L.pv.resize(n);
-    L.pidepth.resize(n);
-    L.pcolor.resize(n);
-    int count = 0;
-    for (int y = kReferenceBorder; y < L.height - kReferenceBorder; ++y) {
-      for (int x = kReferenceBorder; x < L.width - kReferenceBorder; ++x) {
-        const size_t i = static_cast<size_t>(y) * static_cast<size_t>(L.width) + static_cast<size_t>(x);
-        if (!(L.weightMap[i] > 0.f)) {
-          continue;
-        }
-        const float idepth = L.idepthMap[i] / L.weightMap[i];
-        const float color = refLevel.color[i][0];
-        if (!(idepth > 0.f) || !std::isfinite(idepth) || !std::isfinite(color)) {
-          continue;
-        }
-        L.pu[static_cast<size_t>(count)] = static_cast<float>(x);
-        L.pv[static_cast<size_t>(count)] = static_cast<float>(y);
-        L.pidepth[static_cast<size_t>(count)] = idepth;
-        L.pcolor[static_cast<size_t>(count)] = color;
-        ++count;
-      }
-    }
-    L.numPoints = count;
-    maxPoints = std::max(maxPoints, count);
-  }
-  const size_t m = static_cast<size_t>(maxPoints);
-  for (std::vector<float> *buf :
-       {&m_bufIdepth, &m_bufU, &m_bufV, &m_bufDx, &m_bufDy, &m_bufResidual, &m_bufWeight, &m_bufRefColor}) {
-    buf->assign(m, 0.f);
-  }
-}
-
-void CoarseTracker::buildDepthMaps(const std::vector<CoarseTrackerPoint> &points)
-{
-  // Level 0: weighted sums of inverse depth at the nearest pixel (DSO makeCoarseDepthL0).
-  LevelData &L0 = m_levels[0];
-  for (const CoarseTrackerPoint &p : points) {
-    const int x = static_cast<int>(std::floor(p.u + 0.5f));
-    const int y = static_cast<int>(std::floor(p.v + 0.5f));
-    if (x < 0 || y < 0 || x >= L0.width || y >= L0.height || !(p.idepth > 0.f) || !(p.weight > 0.f) ||
-        !std::isfinite(p.idepth)) {
-      continue;
-    }
-    const size_t i = static_cast<size_t>(y) * static_cast<size_t>(L0.width) + static_cast<size_t>(x);
-    L0.idepthMap[i] += p.idepth * p.weight;
-    L0.weightMap[i] += p.weight;
-  }
-  // Coarser levels: sums over 2x2 blocks (the ratio stays a weighted average).
-  for (int l = 1; l < m_numLevels; ++l) {
-    const LevelData &F = m_levels[static_cast<size_t>(l - 1)];
-    LevelData &C = m_levels[static_cast<size_t>(l)];
-    for (int y = 0; y < C.height; ++y) {
-      for (int x = 0; x < C.width; ++x) {
-        const size_t f = static_cast<size_t>(2 * y) * static_cast<size_t>(F.width) + static_cast<size_t>(2 * x);
-        const size_t fw = f + static_cast<size_t>(F.width);
-        const size_t c = static_cast<size_t>(y) * static_cast<size_t>(C.width) + static_cast<size_t>(x);
-        C.idepthMap[c] = F.idepthMap[f] + F.idepthMap[f + 1] + F.idepthMap[fw] + F.idepthMap[fw + 1];
-        C.weightMap[c] = F.weightMap[f] + F.weightMap[f + 1] + F.weightMap[fw] + F.weightMap[fw + 1];
-      }
-    }
-  }
-  // One dilation step: an empty pixel takes the mean of its filled neighbours (diagonal neighbours on the two
-  // finest levels, axis neighbours on coarser ones, DSO). The sums are averaged as sums, so the normalised value
-  // is the weighted mean of the neighbours.
-  for (int l = 0; l < m_numLevels; ++l) {
-    LevelData &L = m_levels[static_cast<size_t>(l)];
-    const int w = L.width;
-    std::copy(L.weightMap.begin(), L.weightMap.end(), L.weightBackup.begin());
-    const bool diagonal = l < kDiagonalDilationLevels;
-    const int o1 = diagonal ? w + 1 : 1;
-    const int o2 = diagonal ? w - 1 : w;
-    const int offsets[4] = {o1, -o1, o2, -o2};
-    for (int y = 1; y < L.height - 1; ++y) {
-      for (int x = 1; x < w - 1; ++x) {
-        const int i = y * w + x;
-        if (L.weightBackup[static_cast<size_t>(i)] > 0.f) {
-          continue;
-        }
-        float sumIdepth = 0.f, sumWeight = 0.f;
-        int count = 0;
-        for (int o : offsets) {
-          const size_t j = static_cast<size_t>(i + o);
-          if (L.weightBackup[j] > 0.f) {
-            sumIdepth += L.idepthMap[j];
-            sumWeight += L.weightBackup[j];
-            ++count;
-          }
-        }
-        if (count > 0) {
-          L.idepthMap[static_cast<size_t>(i)] = sumIdepth / static_cast<float>(count);
-          L.weightMap[static_cast<size_t>(i)] = sumWeight / static_cast<float>(count);
-        }
-      }
-    }
-  }
 }
 
 void CoarseTracker::setWarp(int level, const PyramidLevel &target, const SE3d &newMref, const AffineBrightness &affine,

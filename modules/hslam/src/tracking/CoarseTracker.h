@@ -267,6 +267,8 @@ private:
   };
 
   void buildDepthMaps(const std::vector<CoarseTrackerPoint> &points);
+  //! One dilation of empty pixel \e i from its filled neighbours at \e offsets (buildDepthMaps).
+  static void dilatePixel(LevelData &L, int i, const int (&offsets)[4]);
   void setWarp(int level, const PyramidLevel &target, const SE3d &newMref, const AffineBrightness &affine,
                double newExposure);
   ResidualStats evaluate(int level, const PyramidLevel &target, const SE3d &newMref, const AffineBrightness &affine,
