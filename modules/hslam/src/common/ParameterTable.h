@@ -168,6 +168,10 @@ inline const Field kFields[] = {
   HSLAM_PARAM(globalMap, fusionSigmas, positive(), "late fusion: depths agree within this many sigmas"),
   HSLAM_PARAM(globalMap, reuse, anyValue(), "re-use global points in the window (off: kept, not re-used)"),
   HSLAM_PARAM(globalMap, priorVarianceScale, positive(), "global depth variances times this when re-used"),
+  HSLAM_PARAM(globalMap, anchors, anyValue(), "re-used points measured against their stored keyframe"),
+  HSLAM_PARAM(globalMap, anchorPixelWeight, atLeast(0.), "anchor energy per squared pixel (grey levels^2)"),
+  HSLAM_PARAM(globalMap, anchorHuberPx, positive(), "Huber threshold of an anchor's pixel residual"),
+  HSLAM_PARAM(globalMap, anchorMinForScale, atLeast(1), "anchored points that fix the window's scale"),
 
   HSLAM_PARAM(loop, consistency, atLeast(1), "consecutive keyframes agreeing on a loop candidate"),
   HSLAM_PARAM(loop, minKeyframesBetween, atLeast(0), "keyframes after the start or the last loop first"),

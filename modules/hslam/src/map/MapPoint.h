@@ -18,6 +18,7 @@
 
 #include "features/BinaryDescriptor.h"
 #include "features/PatchPattern.h"
+#include "math/SE3.h"
 
 #include <array>
 #include <cstdint>
@@ -60,6 +61,13 @@ struct MapPoint {
   //! Measurements a re-used point brings from the global map (its old host pixel and old observers' pixels): the
   //! window only measures it in its own keyframes; the others are kept as they were measured.
   std::vector<PixelObservation> carried;
+  //! Anchor of a re-used point (mapping/AnchorResidual.h): the stored keyframe it came from (-1: none), refreshed
+  //! from the global map before each window optimisation, and the pixel and inverse depth it had there.
+  int anchorKeyframeId = -1;
+  SE3d anchorCMw;
+  float anchorU = 0.f, anchorV = 0.f;
+  double anchorIdepth = 0.;
+  double anchorIdepthWeight = 0.; //!< 1 / (stored variance x globalMap.priorVarianceScale)
 };
 
 //! Adds \e keyframeId to a sorted list of observer ids (no duplicate).

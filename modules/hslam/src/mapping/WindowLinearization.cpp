@@ -21,6 +21,12 @@ void WindowAccumulator::reset(int n)
   if (pairH.size() != blocks) {
     pairH.resize(blocks);
     pairB.resize(blocks);
+    frameH.resize(static_cast<size_t>(kMaxWindowKeyframes));
+    frameB.resize(static_cast<size_t>(kMaxWindowKeyframes));
+  }
+  for (int f = 0; f < n; ++f) {
+    frameH[static_cast<size_t>(f)].setZero();
+    frameB[static_cast<size_t>(f)].setZero();
   }
   for (int h = 0; h < n; ++h) {
     for (int t = 0; t < n; ++t) {
@@ -47,6 +53,10 @@ void WindowAccumulator::add(const WindowAccumulator &other)
       pairH[k] += other.pairH[k];
       pairB[k] += other.pairB[k];
     }
+  }
+  for (int f = 0; f < numFrames; ++f) {
+    frameH[static_cast<size_t>(f)] += other.frameH[static_cast<size_t>(f)];
+    frameB[static_cast<size_t>(f)] += other.frameB[static_cast<size_t>(f)];
   }
   Hsc += other.Hsc;
   bsc += other.bsc;
@@ -127,6 +137,16 @@ void linearizeRange(const WindowContext &ctx, std::vector<WindowPoint> &points, 
       Hpp += p.obs.priorWeight;
       bp += p.obs.priorWeight * d;
     }
+    if (p.anchor.active) {
+      // A re-used point's tie to its stored keyframe: blocks on the host's pose and on rho only.
+      AnchorLinearization al;
+      acc.energy += evaluateAnchor(ctx.settings.K, ctx.poses[p.host], p.obs.u, p.obs.v, p.obs.idepth, p.anchor, &al);
+      acc.frameH[static_cast<size_t>(p.host)].topLeftCorner<6, 6>() += al.Hxx;
+      acc.frameB[static_cast<size_t>(p.host)].head<6>() += al.bx;
+      cross[p.host].head<6>() += al.Hxr;
+      Hpp += al.Hrr;
+      bp += al.br;
+    }
     p.Hpp = Hpp;
     p.bp = bp;
     p.inlierResiduals = inliers;
@@ -185,6 +205,9 @@ double energyRange(const WindowContext &ctx, const std::vector<WindowPoint> &poi
     if (p.obs.priorWeight > 0.) {
       const double d = p.obs.idepth - p.obs.idepthPrior;
       sum += p.obs.priorWeight * d * d;
+    }
+    if (p.anchor.active) {
+      sum += evaluateAnchor(ctx.settings.K, ctx.poses[p.host], p.obs.u, p.obs.v, p.obs.idepth, p.anchor, nullptr);
     }
   }
   if (inliers) {

@@ -24,6 +24,7 @@
 #ifndef HSLAM_MAPPING_WINDOW_LINEARIZATION_H
 #define HSLAM_MAPPING_WINDOW_LINEARIZATION_H
 
+#include "mapping/AnchorResidual.h"
 #include "mapping/PhotometricResidual.h"
 
 #include <Eigen/Core>
@@ -54,6 +55,7 @@ struct WindowPoint {
   int inlierResiduals = 0;
   int outlierResidualsRemoved = 0; //!< residuals removed as outliers so far (outlier-point decision)
   std::vector<WindowResidual> residuals;
+  PointAnchor anchor; //!< a re-used global point's tie to its stored keyframe (AnchorResidual.h), else inactive
 };
 
 //! Read-only inputs of a pass.
@@ -61,6 +63,7 @@ struct WindowContext {
   PhotometricSettings settings;
   int numFrames = 0;
   const PyramidLevel *levels[kMaxWindowKeyframes] = {}; //!< level 0 of each window keyframe
+  SE3d poses[kMaxWindowKeyframes];                      //!< world-to-camera pose of each window keyframe (anchors)
   //! pair precalc, host-major: pairs[h * kMaxWindowKeyframes + t]
   std::vector<FramePairPrecalc, Eigen::aligned_allocator<FramePairPrecalc>> pairs;
   WindowContext() : pairs(static_cast<size_t>(kMaxWindowKeyframes * kMaxWindowKeyframes)) {}
@@ -73,6 +76,9 @@ struct VISP_EXPORT WindowAccumulator {
   int numFrames = 0;
   std::vector<Mat8d, Eigen::aligned_allocator<Mat8d>> pairH; //!< relative coordinates, [h * kMax + t]
   std::vector<Vec8d, Eigen::aligned_allocator<Vec8d>> pairB;
+  //! Blocks on one keyframe's own states (anchors: absolute coordinates), [frame]
+  std::vector<Mat8d, Eigen::aligned_allocator<Mat8d>> frameH;
+  std::vector<Vec8d, Eigen::aligned_allocator<Vec8d>> frameB;
   Eigen::MatrixXd Hsc; //!< Schur term H_x,rho H_rho,rho^-1 H_rho,x (absolute, 8n x 8n)
   Eigen::VectorXd bsc; //!< H_x,rho H_rho,rho^-1 b_rho
   double energy = 0.;

@@ -44,6 +44,10 @@ WindowOptimizer::WindowOptimizer(const vpHSlamParameters &params)
                            where(__LINE__) + "mapper.windowSize = " + std::to_string(m_mapper.windowSize) +
                                " is outside [2, " + std::to_string(kMaxWindowKeyframes - 1) + "]");
   }
+  m_anchors = params.globalMap.anchors;
+  m_anchorPixelWeight = params.globalMap.anchorPixelWeight;
+  m_anchorHuberPx = params.globalMap.anchorHuberPx;
+  m_anchorMinForScale = params.globalMap.anchorMinForScale;
   m_settings.huberThreshold = params.tracker.huberThreshold;
   m_settings.outlierEnergy = params.tracker.outlierEnergyPerPixel * kPatternSize;
   m_pool = std::make_unique<WorkerPool>(params.system.workerThreads);
@@ -149,6 +153,7 @@ void WindowOptimizer::syncStatesAndPoints()
     wf.scannedPoints = wf.kf->points.size();
   }
   // Refresh the pointers into Keyframe::points (the vectors may have grown) and the inverse depths.
+  m_anchoredPoints = 0;
   for (WindowPoint &p : m_points) {
     const MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
     p.obs.u = mp.u;
@@ -158,6 +163,17 @@ void WindowOptimizer::syncStatesAndPoints()
     p.obs.weight = mp.patchWeight.data();
     p.obs.idepthPrior = mp.idepthPrior;
     p.obs.priorWeight = mp.idepthPriorWeight;
+    p.anchor.active = m_anchors && mp.anchorKeyframeId >= 0;
+    if (p.anchor.active) {
+      p.anchor.anchorMw = mp.anchorCMw;
+      p.anchor.u = mp.anchorU;
+      p.anchor.v = mp.anchorV;
+      p.anchor.idepth = mp.anchorIdepth;
+      p.anchor.idepthWeight = mp.anchorIdepthWeight;
+      p.anchor.pixelWeight = m_anchorPixelWeight;
+      p.anchor.huberPx = m_anchorHuberPx;
+      ++m_anchoredPoints;
+    }
   }
   m_allPoints.resize(m_points.size());
   for (size_t i = 0; i < m_points.size(); ++i) {
@@ -193,6 +209,7 @@ void WindowOptimizer::prepareContext()
   m_ctx.numFrames = n;
   for (int i = 0; i < n; ++i) {
     m_ctx.levels[i] = &m_frames[static_cast<size_t>(i)].kf->frame->pyramid.level(0);
+    m_ctx.poses[i] = m_states[static_cast<size_t>(i)].cMw;
   }
   for (int h = 0; h < n; ++h) {
     const KeyframeState &sh = m_states[static_cast<size_t>(h)];

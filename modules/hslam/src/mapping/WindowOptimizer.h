@@ -224,6 +224,11 @@ private:
   double m_gradientWeightC;
   double m_affinePriorA, m_affinePriorB;
   double m_affinePriorAFree, m_affinePriorBFree, m_affinePriorACalib, m_affinePriorBCalib;
+  bool m_anchors = true;           //!< globalMap.anchors
+  double m_anchorPixelWeight = 0.; //!< globalMap.anchorPixelWeight
+  double m_anchorHuberPx = 2.;     //!< globalMap.anchorHuberPx
+  int m_anchorMinForScale = 10;    //!< globalMap.anchorMinForScale
+  int m_anchoredPoints = 0;        //!< window points with an active anchor (at the last sync)
 
   std::vector<WindowFrame> m_frames;
   std::vector<KeyframeState> m_states; //!< current states, window order (mirrors Frame::cMw / affine)

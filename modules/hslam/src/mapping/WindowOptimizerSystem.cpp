@@ -25,6 +25,10 @@ void WindowOptimizer::assembleFullSystem(const WindowAccumulator &acc, Eigen::Ma
   const int n = static_cast<int>(m_frames.size());
   H.setZero(n * kFrameDims, n * kFrameDims);
   b.setZero(n * kFrameDims);
+  for (int f = 0; f < n; ++f) {
+    H.block<kFrameDims, kFrameDims>(f * kFrameDims, f * kFrameDims) += acc.frameH[static_cast<size_t>(f)];
+    b.segment<kFrameDims>(f * kFrameDims) += acc.frameB[static_cast<size_t>(f)];
+  }
   for (int h = 0; h < n; ++h) {
     for (int t = 0; t < n; ++t) {
       if (h == t) {
@@ -168,7 +172,8 @@ bool WindowOptimizer::solveStep(double lambda, Eigen::VectorXd &dx)
   for (int i = 0; i < m; ++i) {
     ns[i] = nFull[freeDims[static_cast<size_t>(i)]] / s[i];
   }
-  const double nsSq = ns.squaredNorm();
+  // Enough anchored points (re-used global points tied to stored keyframes) measure the scale: no gauge then.
+  const double nsSq = m_anchoredPoints >= m_anchorMinForScale ? 0. : ns.squaredNorm();
   if (nsSq > kMinScaleDirectionSqNorm) {
     Hs.noalias() += ns * ns.transpose() / nsSq;
   }

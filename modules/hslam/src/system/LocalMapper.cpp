@@ -291,6 +291,7 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
   Impl &m = *m_impl;
   const double t0 = threadCpuMs();
   const std::vector<int> toMarginalize = m.optimizer.keyframesToMarginalize();
+  refreshAnchors();
   const OptimizationSummary summary = m.optimizer.optimize(m.params.mapper.maxOptimizationIterations);
   const double rmse =
       summary.inlierResiduals > 0

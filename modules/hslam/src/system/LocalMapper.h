@@ -245,6 +245,9 @@ private:
   //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
   //! \e seedKeyframe: see makeKeyframe().
   int reuseGlobalPoints(Keyframe &newest, int seedKeyframe);
+  //! Re-read the stored poses the window's re-used points are anchored to (a loop correction moves them); an
+  //! anchor whose keyframe left the global map is dropped.
+  void refreshAnchors();
   //! A stored keyframe, its co-visible keyframes and its neighbours in time that the global map holds (not culled).
   std::vector<int> storedNeighbourhood(int id) const;
   //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.

@@ -97,7 +97,38 @@ void carryObservations(MapPoint &mp, const GlobalPoint &old, int oldHostId)
   }
   addObserver(mp.observers, oldHostId);
 }
+
+//! Tie \e mp to the stored point \e old of keyframe \e oldHost (mapping/AnchorResidual.h); the anchor replaces the
+//! inverse-depth prior in the new host, which carries the same stored estimate.
+void anchorToStoredPoint(MapPoint &mp, const GlobalKeyframe &oldHost, const GlobalPoint &old, double varianceScale)
+{
+  mp.anchorKeyframeId = oldHost.id;
+  mp.anchorCMw = oldHost.cMw;
+  mp.anchorU = old.u;
+  mp.anchorV = old.v;
+  mp.anchorIdepth = old.idepth;
+  mp.anchorIdepthWeight = 1. / std::max(static_cast<double>(old.idepthVar) * varianceScale, 1e-12);
+  mp.idepthPrior = 0.;
+  mp.idepthPriorWeight = 0.;
+}
 } // namespace
+
+void LocalMapper::refreshAnchors()
+{
+  for (const KeyframePtr &kf : m_window) {
+    for (MapPoint &p : kf->points) {
+      if (p.anchorKeyframeId < 0 || p.status != PointStatus::active) {
+        continue;
+      }
+      const GlobalKeyframe *stored = m_globalMap.find(p.anchorKeyframeId);
+      if (stored) {
+        p.anchorCMw = stored->cMw;
+      } else {
+        p.anchorKeyframeId = -1;
+      }
+    }
+  }
+}
 
 bool LocalMapper::keepsGlobalMap() const
 {
@@ -284,6 +315,9 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
     mp.idepthPriorWeight = priorWeight;
     mp.fromGlobalMap = true;
     carryObservations(mp, oldHost->points[match.pointIndex], match.keyframeId);
+    if (g.anchors) {
+      anchorToStoredPoint(mp, *oldHost, oldHost->points[match.pointIndex], g.priorVarianceScale);
+    }
     newest.points.push_back(std::move(mp));
     m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::reactivated);
     eraseImmature[ii] = true;
@@ -331,6 +365,9 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
       p.fromGlobalMap = true;
       const GlobalKeyframe *oldHost = m_globalMap.find(match.keyframeId);
       carryObservations(p, oldHost->points[match.pointIndex], match.keyframeId);
+      if (g.anchors) {
+        anchorToStoredPoint(p, *oldHost, oldHost->points[match.pointIndex], g.priorVarianceScale);
+      }
       m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::fused);
       ++fused;
     }

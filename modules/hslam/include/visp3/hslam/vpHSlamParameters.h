@@ -176,6 +176,13 @@ public:
     double fusionSigmas = 2.;        //!< late fusion: projected depth within this many standard deviations
     bool reuse = true;               //!< re-use global points in the window (off: the map is kept, not re-used)
     double priorVarianceScale = 10.; //!< re-used depth variances times this (> 1: trust less; measured, README)
+    //! A re-used point is measured against its stored keyframe in the window (held fixed), which ties the window to
+    //! the stored map (off: only an inverse-depth prior in its new host). Off by default: it registers later laps
+    //! onto the first, but lost tracking more often (README, "Global map and loop closure").
+    bool anchors = false;
+    double anchorPixelWeight = 100.; //!< anchor energy per squared pixel, window units (grey levels squared)
+    double anchorHuberPx = 2.;       //!< Huber threshold of an anchor's pixel residual
+    int anchorMinForScale = 10;      //!< anchored points that make the window's scale observable (no scale gauge)
   };
 
   /*!
