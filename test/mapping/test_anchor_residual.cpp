@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <functional>
 
 using namespace hslam;
@@ -142,4 +143,15 @@ TEST(AnchorResidual, GaussNewtonStepRecoversAShiftedHostPose)
     hostMw = SE3d::exp(-H.ldlt().solve(b)) * hostMw;
   }
   EXPECT_LT((hostMw * truthMw.inverse()).log().norm(), 1e-8);
+}
+
+TEST(AnchorResidual, PixelErrorIsTheDistanceToTheStoredPixel)
+{
+  const AnchoredPoint s;
+  EXPECT_NEAR(anchorPixelError(s.K, s.hostMw, s.u, s.v, s.idepth, s.storedMw, s.anchor.u, s.anchor.v), 0., 1e-9);
+  EXPECT_NEAR(anchorPixelError(s.K, s.hostMw, s.u, s.v, s.idepth, s.storedMw, s.anchor.u + 3., s.anchor.v - 4.), 5.,
+              1e-9);
+  // Behind the stored camera: not a usable anchor.
+  const SE3d turnedMw = pose(0., 0., 0., 0., M_PI, 0.) * s.storedMw;
+  EXPECT_TRUE(std::isinf(anchorPixelError(s.K, s.hostMw, s.u, s.v, s.idepth, turnedMw, s.anchor.u, s.anchor.v)));
 }

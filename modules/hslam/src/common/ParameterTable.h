@@ -172,6 +172,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(globalMap, anchorPixelWeight, atLeast(0.), "anchor energy per squared pixel (grey levels^2)"),
   HSLAM_PARAM(globalMap, anchorHuberPx, positive(), "Huber threshold of an anchor's pixel residual"),
   HSLAM_PARAM(globalMap, anchorMinForScale, atLeast(1), "anchored points that fix the window's scale"),
+  HSLAM_PARAM(globalMap, anchorMaxErrorPx, positive(), "anchors farther than this after optimising are dropped"),
 
   HSLAM_PARAM(loop, consistency, atLeast(1), "consecutive keyframes agreeing on a loop candidate"),
   HSLAM_PARAM(loop, minKeyframesBetween, atLeast(0), "keyframes after the start or the last loop first"),

@@ -4,6 +4,7 @@
 #include "mapping/AnchorResidual.h"
 
 #include <cmath>
+#include <limits>
 
 namespace hslam
 {
@@ -53,5 +54,15 @@ double evaluateAnchor(const PinholeIntrinsics &K, const SE3d &hostMw, double u, 
     lin->br = b[6];
   }
   return energy;
+}
+
+double anchorPixelError(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
+                        const SE3d &anchorMw, double anchorU, double anchorV)
+{
+  const Eigen::Vector3d Pa = anchorMw * (hostMw.inverse() * K.unproject(u, v, idepth));
+  if (!(idepth > 0.) || !(Pa.z() > kMinAnchorDepth)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return std::hypot(K.fx * Pa.x() / Pa.z() + K.cx - anchorU, K.fy * Pa.y() / Pa.z() + K.cy - anchorV);
 }
 } // namespace hslam

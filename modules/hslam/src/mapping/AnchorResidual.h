@@ -64,6 +64,13 @@ struct AnchorLinearization {
 */
 VISP_EXPORT double evaluateAnchor(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
                                   const PointAnchor &anchor, AnchorLinearization *lin);
+
+/*!
+  Reprojection error, pixels, of a window point (host pixel (u, v), inverse depth \e idepth, host pose \e hostMw) in
+  the stored keyframe \e anchorMw against the pixel (anchorU, anchorV); infinity when it is not in front of it.
+*/
+VISP_EXPORT double anchorPixelError(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
+                                    const SE3d &anchorMw, double anchorU, double anchorV);
 } // namespace hslam
 
 #endif

@@ -293,6 +293,7 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
   const std::vector<int> toMarginalize = m.optimizer.keyframesToMarginalize();
   refreshAnchors();
   const OptimizationSummary summary = m.optimizer.optimize(m.params.mapper.maxOptimizationIterations);
+  const int anchorOutliers = dropAnchorOutliers();
   const double rmse =
       summary.inlierResiduals > 0
           ? std::sqrt(summary.finalPhotometricEnergy / (static_cast<double>(summary.inlierResiduals) * kPatternSize))
@@ -300,7 +301,8 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << kf->id() << ": " << summary.activePoints << " points, "
                                               << summary.iterations << " LM iterations (" << summary.acceptedSteps
                                               << " accepted), rmse " << rmse << ", " << summary.outlierPoints
-                                              << " outlier points, " << summary.totalMs << " ms");
+                                              << " outlier points, " << anchorOutliers << " anchors dropped, "
+                                              << summary.totalMs << " ms");
   // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong.
   const int checked = m.keyframesInSegment - kFirstCheckedKeyframe;
   if (checked >= 0 && checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&

@@ -248,6 +248,9 @@ private:
   //! Re-read the stored poses the window's re-used points are anchored to (a loop correction moves them); an
   //! anchor whose keyframe left the global map is dropped.
   void refreshAnchors();
+  //! After an optimisation: anchors whose point lands more than globalMap.anchorMaxErrorPx from its stored pixel are
+  //! dropped (a wrong match, or a stored point the window disagrees with); returns how many.
+  int dropAnchorOutliers();
   //! A stored keyframe, its co-visible keyframes and its neighbours in time that the global map holds (not culled).
   std::vector<int> storedNeighbourhood(int id) const;
   //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.

@@ -8,6 +8,7 @@
 #include "system/LocalMapperImpl.h"
 
 #include "map/GlobalPointReuse.h"
+#include "mapping/AnchorResidual.h"
 #include "mapping/PointActivation.h"
 
 #include <visp3/hslam/vpHSlamLog.h>
@@ -112,6 +113,25 @@ void anchorToStoredPoint(MapPoint &mp, const GlobalKeyframe &oldHost, const Glob
   mp.idepthPriorWeight = 0.;
 }
 } // namespace
+
+int LocalMapper::dropAnchorOutliers()
+{
+  const double maxError = m_impl->params.globalMap.anchorMaxErrorPx;
+  int dropped = 0;
+  for (const KeyframePtr &kf : m_window) {
+    for (MapPoint &p : kf->points) {
+      if (p.anchorKeyframeId < 0 || p.status != PointStatus::active) {
+        continue;
+      }
+      if (!(anchorPixelError(m_impl->K0, kf->frame->cMw, p.u, p.v, p.idepth, p.anchorCMw, p.anchorU, p.anchorV) <=
+            maxError)) {
+        p.anchorKeyframeId = -1;
+        ++dropped;
+      }
+    }
+  }
+  return dropped;
+}
 
 void LocalMapper::refreshAnchors()
 {

@@ -183,6 +183,7 @@ public:
     double anchorPixelWeight = 100.; //!< anchor energy per squared pixel, window units (grey levels squared)
     double anchorHuberPx = 2.;       //!< Huber threshold of an anchor's pixel residual
     int anchorMinForScale = 10;      //!< anchored points that make the window's scale observable (no scale gauge)
+    double anchorMaxErrorPx = 4.;    //!< after an optimisation, anchors farther than this from their pixel are dropped
   };
 
   /*!
