@@ -17,9 +17,11 @@
   - when it is marginalised it is dropped (a fixed state passes no Schur term), so the prior keeps the remaining
     keyframes tied to it: from then on the prior carries the pose and affine gauge (as DSO's first-frame prior
     does once marginalised);
-  - scale is never observable: each step is constrained orthogonal to the scale direction (all translations
-    scaled about the gauge keyframe's centre), with a rank-one term in the Jacobi-scaled system and a final
-    projection (DSO orthogonalises its steps against the same null space).
+  - scale is not observable from photometric residuals: each step is constrained orthogonal to the scale direction
+    (all translations scaled about the gauge keyframe's centre), with a rank-one term in the Jacobi-scaled system
+    and a final projection (DSO orthogonalises its steps against the same null space). Exception: with
+    globalMap.anchors, re-used points anchored to stored keyframes (AnchorResidual.h) measure the scale, and with
+    globalMap.anchorMinForScale of them in the window the step is left free.
 
   Marginalisation (marginalizeKeyframe): the keyframe's points with an inverse-depth Hessian above
   mapper.minIdepthHessianMarginalize are Schur-complemented into the prior, the others dropped; residuals of

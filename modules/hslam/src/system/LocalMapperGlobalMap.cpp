@@ -116,6 +116,9 @@ void anchorToStoredPoint(MapPoint &mp, const GlobalKeyframe &oldHost, const Glob
 
 int LocalMapper::dropAnchorOutliers()
 {
+  if (!m_impl->params.globalMap.anchors) {
+    return 0; // no point carries an anchor
+  }
   const double maxError = m_impl->params.globalMap.anchorMaxErrorPx;
   int dropped = 0;
   for (const KeyframePtr &kf : m_window) {
@@ -135,6 +138,9 @@ int LocalMapper::dropAnchorOutliers()
 
 void LocalMapper::refreshAnchors()
 {
+  if (!m_impl->params.globalMap.anchors) {
+    return;
+  }
   for (const KeyframePtr &kf : m_window) {
     for (MapPoint &p : kf->points) {
       if (p.anchorKeyframeId < 0 || p.status != PointStatus::active) {
