@@ -12,22 +12,39 @@ namespace
 {
 //! Depth in the stored camera below which the anchor is not evaluated (behind or at the camera centre).
 constexpr double kMinAnchorDepth = 1e-6;
+
+//! The window point (host pixel, inverse depth, host pose) in the stored camera: aMh, P_h, P_a and the pixel
+//! residual against (anchorU, anchorV). False when the inverse depth is not positive or P_a is not in front.
+bool projectIntoStored(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
+                       const SE3d &anchorMw, double anchorU, double anchorV, SE3d &aMh, Eigen::Vector3d &Ph,
+                       Eigen::Vector3d &Pa, Eigen::Vector2d &rPx)
+{
+  if (!(idepth > 0.)) {
+    return false;
+  }
+  aMh = anchorMw * hostMw.inverse();
+  Ph = K.unproject(u, v, idepth);
+  Pa = aMh * Ph;
+  if (!(Pa.z() > kMinAnchorDepth)) {
+    return false;
+  }
+  const double iz = 1. / Pa.z();
+  rPx = Eigen::Vector2d(K.fx * Pa.x() * iz + K.cx - anchorU, K.fy * Pa.y() * iz + K.cy - anchorV);
+  return true;
+}
 } // namespace
 
 double evaluateAnchor(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
                       const PointAnchor &anchor, AnchorLinearization *lin)
 {
-  if (!anchor.active || !(idepth > 0.)) {
-    return 0.;
-  }
-  const SE3d aMh = anchor.anchorMw * hostMw.inverse();
-  const Eigen::Vector3d Ph = K.unproject(u, v, idepth);
-  const Eigen::Vector3d Pa = aMh * Ph;
-  if (!(Pa.z() > kMinAnchorDepth)) {
+  SE3d aMh;
+  Eigen::Vector3d Ph, Pa;
+  Eigen::Vector2d rPx;
+  if (!anchor.active ||
+      !projectIntoStored(K, hostMw, u, v, idepth, anchor.anchorMw, anchor.u, anchor.v, aMh, Ph, Pa, rPx)) {
     return 0.;
   }
   const double iz = 1. / Pa.z();
-  const Eigen::Vector2d rPx(K.fx * Pa.x() * iz + K.cx - anchor.u, K.fy * Pa.y() * iz + K.cy - anchor.v);
   const double rRho = iz - anchor.idepth;
   const double norm = rPx.norm();
   const double k = anchor.huberPx;
@@ -59,10 +76,12 @@ double evaluateAnchor(const PinholeIntrinsics &K, const SE3d &hostMw, double u, 
 double anchorPixelError(const PinholeIntrinsics &K, const SE3d &hostMw, double u, double v, double idepth,
                         const SE3d &anchorMw, double anchorU, double anchorV)
 {
-  const Eigen::Vector3d Pa = anchorMw * (hostMw.inverse() * K.unproject(u, v, idepth));
-  if (!(idepth > 0.) || !(Pa.z() > kMinAnchorDepth)) {
+  SE3d aMh;
+  Eigen::Vector3d Ph, Pa;
+  Eigen::Vector2d rPx;
+  if (!projectIntoStored(K, hostMw, u, v, idepth, anchorMw, anchorU, anchorV, aMh, Ph, Pa, rPx)) {
     return std::numeric_limits<double>::infinity();
   }
-  return std::hypot(K.fx * Pa.x() / Pa.z() + K.cx - anchorU, K.fy * Pa.y() / Pa.z() + K.cy - anchorV);
+  return rPx.norm();
 }
 } // namespace hslam
