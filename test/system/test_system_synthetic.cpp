@@ -193,6 +193,16 @@ TEST(SystemSynthetic, CoveredLensIsRelocalisedWithDirectTrackingInSlamMode)
   expectCoveredLensRelocalised(params);
 }
 
+TEST(SystemSynthetic, CoveredLensIsRelocalisedWithDirectTrackingInVoReuseMode)
+{
+  // vo-reuse keeps a global map too, so its keyframes are indexed and a lost camera is found in them (before
+  // 2026-11-29 only slam mode did this: vo-reuse started a new segment, whose initialisation can take seconds).
+  vpHSlamParameters params = parameters(true);
+  params.system.mode = vpHSlamParameters::modeVoReuse;
+  ASSERT_EQ(params.tracking.mode, vpHSlamParameters::trackingDirect);
+  expectCoveredLensRelocalised(params);
+}
+
 TEST(SystemSynthetic, RealTimeHybridCoveredLensKeepsTracking)
 {
   // The same covered lens in real-time mode (mapping thread; relocalisation waits for it): run under

@@ -38,9 +38,13 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_initializer = std::make_unique<TwoViewInitializer>(m_params.initializer, m_preprocessor.intrinsics(), orbOptions);
   m_tracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
   m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
-  // The vocabulary: relocalisation (hybrid / indirect tracking) and loop detection (slam mode).
-  if ((m_params.tracking.mode != vpHSlamParameters::trackingDirect && m_params.tracking.relocalize) ||
-      m_params.system.mode == vpHSlamParameters::modeSlam || m_params.system.localizationOnly) {
+  // Relocalisation needs the keyframe database: with hybrid / indirect tracking, and with direct tracking in the
+  // modes that keep a global map (vo-reuse, slam), where a lost camera is found again in the stored keyframes.
+  const bool direct = m_params.tracking.mode == vpHSlamParameters::trackingDirect;
+  const bool keepsMap = m_params.system.mode != vpHSlamParameters::modeVoStrict;
+  const bool relocalizes = m_params.tracking.relocalize && (!direct || keepsMap);
+  // The vocabulary: relocalisation, loop detection (slam mode) and localisation in a loaded map.
+  if (relocalizes || m_params.system.mode == vpHSlamParameters::modeSlam || m_params.system.localizationOnly) {
     const std::string path = vpHSlamVocabulary::defaultPath();
     if (path.empty()) {
       VP_HSLAM_LOG(vpHSlamLog::warning,
@@ -55,10 +59,9 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                            m_preprocessor.height(), calibrated,
                                            m_vocabulary ? &m_vocabulary->impl() : nullptr);
-  // The frame's ORB features: hybrid / indirect tracking, localisation-only, and relocalisation in slam mode with
-  // direct tracking (frames are then described only while the camera is lost).
-  if (m_params.tracking.mode != vpHSlamParameters::trackingDirect || m_params.system.localizationOnly ||
-      (m_params.system.mode == vpHSlamParameters::modeSlam && m_params.tracking.relocalize)) {
+  // The frame's ORB features: hybrid / indirect tracking, localisation-only, and relocalisation with direct tracking
+  // (frames are then described only while the camera is lost).
+  if (!direct || m_params.system.localizationOnly || relocalizes) {
     m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
                                                m_preprocessor.height());
     m_windowRelocalization = std::make_unique<WindowRelocalization>(m_preprocessor.intrinsics());

@@ -147,7 +147,8 @@ public:
     int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
     int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
     bool relocalize = true; //!< when tracking fails, relocalise in the same map before a new segment (hybrid or
-                            //!< indirect tracking, or any tracking in slam mode: it needs the keyframe database)
+                            //!< indirect tracking, or any tracking in vo-reuse and slam: it needs the keyframe
+                            //!< database)
     double relocalizationTimeout = 1.;   //!< seconds of frames with features not relocalised before a new segment
     int relocalizationCandidates = 5;    //!< keyframes tried per lost frame, best BoW score first
     int relocalizationMinInliers = 30;   //!< PnP inliers after refinement to accept a relocalisation
