@@ -1,7 +1,8 @@
 /*
  * H-SLAM for ViSP.
  */
-// Marginalisation prior: Schur complement and FEJ algebra, and the window's gauge before / after marginalising.
+// Marginalisation prior: Schur complement and FEJ algebra, the window's gauge before / after marginalising, and what
+// becomes of points kept on a depth prior when they leave the window.
 #include "HSlamTestData.h"
 #include "WindowTestScene.h"
 
@@ -227,4 +228,96 @@ TEST(WindowMarginalization, GaugeNullSpaceAndPriorAfterMarginalizingTheOldestKey
   EXPECT_NEAR(scale, 1., 0.01);
   EXPECT_LT(maxRot, 0.03);
   EXPECT_LT(maxTrans, 0.0015);
+}
+
+namespace
+{
+//! Flags the first \e count active points of \e kf as kept on a depth prior at their own inverse depth.
+void flagOnPrior(Keyframe &kf, size_t count)
+{
+  for (size_t i = 0; i < count && i < kf.points.size(); ++i) {
+    MapPoint &p = kf.points[i];
+    p.depthFromPrior = true;
+    p.idepthPrior = p.idepth;
+    p.idepthPriorWeight = 1. / (p.idepth * p.idepth);
+  }
+}
+
+//! Status counts of the first \e count points of \e kf and of the others.
+void countStatuses(const Keyframe &kf, size_t count, int &flaggedOutliers, int &othersMarginalized)
+{
+  flaggedOutliers = othersMarginalized = 0;
+  for (size_t i = 0; i < kf.points.size(); ++i) {
+    if (i < count) {
+      flaggedOutliers += kf.points[i].status == PointStatus::outlier;
+    } else {
+      othersMarginalized += kf.points[i].status == PointStatus::marginalized;
+    }
+  }
+}
+} // namespace
+
+TEST(WindowMarginalization, PointsOnADepthPriorAreStoredOnlyOnceTheWindowMeasuredTheirDepth)
+{
+  // A point activated on a depth prior while the camera turned in place (LocalMapper, mapper.rotationFlowPx) leaves
+  // the window as an outlier unless an optimisation found its depth measured (photometric inverse-depth Hessian at
+  // least mapper.minIdepthHessianActivate): a guessed depth must not enter the global map.
+  TestScene scene;
+  constexpr int kPoints = 150;
+  constexpr size_t kFlagged = 20;
+  int flaggedOutliers = 0, othersMarginalized = 0;
+
+  // Keyframes 4 frames apart: every depth is measured, so an optimisation clears the flags.
+  {
+    WindowOptimizer opt(scene.params);
+    std::vector<KeyframePtr> kfs;
+    for (int k = 0; k < 4; ++k) {
+      kfs.push_back(scene.makeKeyframe(static_cast<unsigned int>(k) * 4u, k, kPoints));
+      opt.addKeyframe(kfs.back());
+    }
+    flagOnPrior(*kfs[0], kFlagged);
+    opt.optimize(3);
+    int stillFlagged = 0;
+    for (const MapPoint &p : kfs[0]->points) {
+      stillFlagged += p.depthFromPrior ? 1 : 0;
+    }
+    EXPECT_EQ(stillFlagged, 0);
+    opt.marginalizeKeyframe(0);
+    countStatuses(*kfs[0], kFlagged, flaggedOutliers, othersMarginalized);
+    EXPECT_EQ(flaggedOutliers, 0);
+  }
+  // The same keyframes marginalised before any optimisation saw them: the flagged points are dropped, not the others.
+  {
+    WindowOptimizer opt(scene.params);
+    std::vector<KeyframePtr> kfs;
+    for (int k = 0; k < 4; ++k) {
+      kfs.push_back(scene.makeKeyframe(static_cast<unsigned int>(k) * 4u, k, kPoints));
+      opt.addKeyframe(kfs.back());
+    }
+    flagOnPrior(*kfs[0], kFlagged);
+    opt.marginalizeKeyframe(0);
+    countStatuses(*kfs[0], kFlagged, flaggedOutliers, othersMarginalized);
+    EXPECT_EQ(flaggedOutliers, static_cast<int>(kFlagged));
+    EXPECT_EQ(othersMarginalized, static_cast<int>(kfs[0]->points.size() - kFlagged));
+  }
+  // Four keyframes at the same pose (a camera turning about its centre, without the turn): no baseline, no depth
+  // measured, the flags stay through an optimisation and the flagged points are dropped.
+  {
+    WindowOptimizer opt(scene.params);
+    std::vector<KeyframePtr> kfs;
+    for (int k = 0; k < 4; ++k) {
+      kfs.push_back(scene.makeKeyframe(0u, k, kPoints));
+      opt.addKeyframe(kfs.back());
+    }
+    flagOnPrior(*kfs[0], kFlagged);
+    opt.optimize(3);
+    int stillFlagged = 0;
+    for (size_t i = 0; i < kFlagged; ++i) {
+      stillFlagged += kfs[0]->points[i].depthFromPrior ? 1 : 0;
+    }
+    EXPECT_EQ(stillFlagged, static_cast<int>(kFlagged));
+    opt.marginalizeKeyframe(0);
+    countStatuses(*kfs[0], kFlagged, flaggedOutliers, othersMarginalized);
+    EXPECT_EQ(flaggedOutliers, static_cast<int>(kFlagged));
+  }
 }

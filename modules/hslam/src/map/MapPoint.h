@@ -58,6 +58,9 @@ struct MapPoint {
   double idepthPrior = 0.;
   double idepthPriorWeight = 0.;
   bool fromGlobalMap = false; //!< re-activated or fused from a global point (vo-reuse)
+  //! Kept on a depth prior while the camera turned in place (mapper.rotationFlowPx); cleared once the window
+  //! measures its depth. Such a point leaving the window unmeasured is dropped, not stored: a guess is no landmark.
+  bool depthFromPrior = false;
   //! Measurements a re-used point brings from the global map (its old host pixel and old observers' pixels): the
   //! window only measures it in its own keyframes; the others are kept as they were measured.
   std::vector<PixelObservation> carried;
@@ -69,6 +72,12 @@ struct MapPoint {
   double anchorIdepth = 0.;
   double anchorIdepthWeight = 0.; //!< 1 / (stored variance x globalMap.priorVarianceScale)
 };
+
+//! Status of a point leaving the window: marginalised (kept in the global map) unless its depth was never measured.
+inline PointStatus leavingStatus(const MapPoint &p)
+{
+  return p.depthFromPrior ? PointStatus::outlier : PointStatus::marginalized;
+}
 
 //! Adds \e keyframeId to a sorted list of observer ids (no duplicate).
 inline void addObserver(std::vector<int> &observers, int keyframeId)

@@ -139,7 +139,8 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
   std::vector<int> marg;
   for (int pi : hosted) {
     const WindowPoint &p = m_points[static_cast<size_t>(pi)];
-    if (p.inlierResiduals > 0 && p.Hpp >= m_mapper.minIdepthHessianMarginalize) {
+    const MapPoint &mp = m_frames[static_cast<size_t>(idx)].kf->points[static_cast<size_t>(p.pointIndex)];
+    if (p.inlierResiduals > 0 && p.Hpp >= m_mapper.minIdepthHessianMarginalize && !mp.depthFromPrior) {
       marg.push_back(pi);
     }
   }
@@ -170,7 +171,7 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
       MapPoint &mp = m_frames[static_cast<size_t>(idx)].kf->points[static_cast<size_t>(p.pointIndex)];
       mp.idepth = p.obs.idepth;
       mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
-      mp.status = PointStatus::marginalized;
+      mp.status = leavingStatus(mp);
       remove[i] = 1;
       continue;
     }
@@ -183,7 +184,7 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
     if (p.residuals.empty()) {
       // Observed by nothing that stays: it leaves the window with the keyframe (not into the prior).
       MapPoint &mp = m_frames[static_cast<size_t>(p.host)].kf->points[static_cast<size_t>(p.pointIndex)];
-      mp.status = PointStatus::marginalized;
+      mp.status = leavingStatus(mp);
       remove[i] = 1;
     }
   }

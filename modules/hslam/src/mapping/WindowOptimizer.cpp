@@ -406,6 +406,9 @@ void WindowOptimizer::writeBack()
     mp.idepth = p.obs.idepth;
     // DSO's variance proxy: the inverse of the point's own (undamped) Hessian block.
     mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
+    if (mp.depthFromPrior && p.Hpp - p.obs.priorWeight >= m_mapper.minIdepthHessianActivate) {
+      mp.depthFromPrior = false; // the window measures it now, as it would to activate it
+    }
     // Co-visibility: every keyframe in which the point had an inlier residual observes it.
     for (const WindowResidual &r : p.residuals) {
       if (r.state == ResidualState::inlier) {

@@ -26,6 +26,8 @@ namespace
 {
 //! DSO optimizeImmaturePoint: Gauss-Newton iterations on a point's inverse depth at activation.
 constexpr int kActivationIterations = 3;
+//! Inlier residuals a candidate needs to be kept on a depth prior while the window is short of points (rotation).
+constexpr int kMinRotationPointInliers = 2;
 //! DSO makeCoarseDepthL0: a point's weight in the tracking reference is sqrt(1e-3 * H_idepth).
 constexpr double kTrackingWeightScale = 1e-3;
 //! Floor on a point's inverse-depth variance when turned into a tracking weight (a zero variance = unknown).
@@ -268,15 +270,38 @@ void LocalMapper::activatePoints(const Keyframe &newest)
   const ActivationPlan plan = m.activation.selectPoints(m_window, newest);
   std::vector<ImmaturePointRef> erase = plan.drop;
   erase.reserve(plan.drop.size() + plan.activate.size());
+  // A camera turning in place measures no depth: every candidate fails the Hessian test and the window empties.
+  // Then candidates whose residuals agree are kept on a weak prior (mapper.rotationFlowPx).
+  const double rotationIdepth =
+      m.params.mapper.rotationFlowPx > 0. && activePointCount() < m.params.features.desiredPointDensity
+          ? medianActiveIdepth()
+          : 0.;
+  int onPrior = 0;
   for (const ActivationCandidate &c : plan.activate) {
     Keyframe &host = *m_window[static_cast<size_t>(c.ref.windowIndex)];
     const ImmaturePoint &pt = host.immature[static_cast<size_t>(c.ref.pointIndex)];
-    const PointActivationResult r =
+    PointActivationResult r =
         m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, c.idepth, pt.patch, pt.patchWeight, kActivationIterations);
+    double priorIdepth = 0., priorWeight = 0.;
+    if (!r.accepted && rotationIdepth > 0. && r.inlierResiduals >= kMinRotationPointInliers &&
+        m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * rotationIdepth <
+            m.params.mapper.rotationFlowPx) {
+      // The prior: the window's median inverse depth, inside the interval the traces left, one sigma its own size.
+      priorIdepth =
+          std::min(std::max(rotationIdepth, static_cast<double>(c.idepthMin)), static_cast<double>(c.idepthMax));
+      priorWeight = 1. / (priorIdepth * priorIdepth);
+      r = m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, priorIdepth, pt.patch, pt.patchWeight,
+                                       kActivationIterations, priorIdepth, priorWeight);
+      r.accepted = std::isfinite(r.energy) && r.idepth > 0. && r.inlierResiduals >= kMinRotationPointInliers;
+    }
     if (r.accepted) {
       MapPoint mp = PointActivation::makeMapPoint(pt);
       mp.idepth = r.idepth;
       mp.idepthVar = 1. / r.idepthHessian;
+      mp.idepthPrior = priorIdepth;
+      mp.idepthPriorWeight = priorWeight;
+      mp.depthFromPrior = priorWeight > 0.;
+      onPrior += mp.depthFromPrior ? 1 : 0;
       host.points.push_back(mp);
       erase.push_back(c.ref);
     } else if (r.inlierResiduals == 0) {
@@ -284,6 +309,10 @@ void LocalMapper::activatePoints(const Keyframe &newest)
     }
   }
   PointActivation::eraseImmaturePoints(m_window, erase);
+  if (onPrior > 0) {
+    VP_HSLAM_LOG(vpHSlamLog::debug,
+                 "keyframe " << newest.id() << ": " << onPrior << " points activated on a depth prior (no baseline)");
+  }
 }
 
 void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
@@ -394,13 +423,13 @@ void LocalMapper::dropPointsOutOfView(const Keyframe &newest)
       const Eigen::Vector3d ray((p.u - m_impl->K0.cx) / m_impl->K0.fx, (p.v - m_impl->K0.cy) / m_impl->K0.fy, 1.);
       const Eigen::Vector3d q = R * ray + t * p.idepth;
       if (!(q.z() > 0.)) {
-        p.status = PointStatus::marginalized;
+        p.status = leavingStatus(p);
         continue;
       }
       const double u = m_impl->K0.fx * q.x() / q.z() + m_impl->K0.cx;
       const double v = m_impl->K0.fy * q.y() / q.z() + m_impl->K0.cy;
       if (!level0.isInside(static_cast<float>(u), static_cast<float>(v), static_cast<float>(kPatternPadding))) {
-        p.status = PointStatus::marginalized;
+        p.status = leavingStatus(p);
       }
     }
   }
@@ -453,119 +482,5 @@ void LocalMapper::marginalize(int keyframeId)
     storeInGlobalMap(**it, pairs); // after setKeyframePoints: a culled keyframe then leaves the index whole
   }
   m_window.erase(it);
-}
-
-// ------------------------------------------------------------------------------------------------ outputs
-
-bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
-                                           double &exposure) const
-{
-  const Impl &m = *m_impl;
-  if (m_window.empty() || m.referenceKeyframe < 0) {
-    return false;
-  }
-  KeyframePtr ref;
-  for (const KeyframePtr &kf : m_window) {
-    if (kf->id() == m.referenceKeyframe) {
-      ref = kf;
-    }
-  }
-  if (!ref) {
-    return false;
-  }
-  tracker.setReference(*ref->frame, m.referencePoints);
-  tracker.setReferenceFeatures(m.referenceFeatures);
-  keyframeId = ref->id();
-  affine = ref->frame->affine;
-  exposure = ref->frame->exposure;
-  return true;
-}
-
-void LocalMapper::takeKeyframeStates(std::vector<KeyframeState> &states)
-{
-  states = m_impl->marginalizedStates;
-  m_impl->marginalizedStates.clear();
-  for (const KeyframePtr &kf : m_window) {
-    KeyframeState s;
-    s.id = kf->id();
-    s.wMc = kf->frame->cMw.inverse();
-    s.inWindow = true;
-    for (const MapPoint &p : kf->points) {
-      s.activePoints += p.status == PointStatus::active ? 1u : 0u;
-    }
-    states.push_back(s);
-  }
-}
-
-void LocalMapper::activePointsWorld(std::vector<Eigen::Vector3d> &points) const
-{
-  points.clear();
-  const PinholeIntrinsics &K = m_impl->K0;
-  for (const KeyframePtr &kf : m_window) {
-    const SE3d wMc = kf->frame->cMw.inverse();
-    for (const MapPoint &p : kf->points) {
-      if (p.status != PointStatus::active || !(p.idepth > 0.)) {
-        continue;
-      }
-      const Eigen::Vector3d cX((p.u - K.cx) / K.fx / p.idepth, (p.v - K.cy) / K.fy / p.idepth, 1. / p.idepth);
-      points.push_back(wMc * cX);
-    }
-  }
-}
-
-int LocalMapper::activePointCount() const
-{
-  int n = 0;
-  for (const KeyframePtr &kf : m_window) {
-    for (const MapPoint &p : kf->points) {
-      n += p.status == PointStatus::active ? 1 : 0;
-    }
-  }
-  return n;
-}
-
-int LocalMapper::immaturePointCount() const
-{
-  int n = 0;
-  for (const KeyframePtr &kf : m_window) {
-    n += static_cast<int>(kf->immature.size());
-  }
-  return n;
-}
-
-double LocalMapper::memoryBytes() const
-{
-  double bytes = 0.;
-  for (const KeyframePtr &kf : m_window) {
-    const ImagePyramid &pyr = kf->frame->pyramid;
-    for (int l = 0; l < pyr.numLevels(); ++l) {
-      const PyramidLevel &level = pyr.level(l);
-      bytes += static_cast<double>(level.color.capacity() * sizeof(Eigen::Vector3f) +
-                                   level.gradSq.capacity() * sizeof(float));
-    }
-    bytes += static_cast<double>(kf->frame->raw.getSize());
-    bytes +=
-        static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
-  }
-  return bytes + marginalizedMemoryBytes();
-}
-
-double LocalMapper::marginalizedMemoryBytes() const
-{
-  double bytes = m_globalMap.memoryBytes();
-  if (m_impl->relocalization) {
-    bytes += m_impl->relocalization->memoryBytes();
-  }
-  return bytes;
-}
-
-SE3d LocalMapper::newestKeyframe_cMw() const
-{
-  return m_window.empty() ? SE3d() : m_window.back()->frame->cMw;
-}
-
-int LocalMapper::newestKeyframeId() const
-{
-  return m_window.empty() ? -1 : m_window.back()->id();
 }
 } // namespace hslam

@@ -229,6 +229,8 @@ public:
 private:
   void traceAll(const Frame &frame);
   void activatePoints(const Keyframe &newest);
+  //! Median inverse depth of the window's active points (each in its host), 0 when there is none.
+  double medianActiveIdepth() const;
   //! Optimise, check, build the tracking reference, drop points out of view, new immature points, marginalise.
   void finishKeyframe(const KeyframePtr &kf, int seedKeyframe = -1);
   void buildReferencePoints();
