@@ -243,6 +243,18 @@ void flagOnPrior(Keyframe &kf, size_t count)
   }
 }
 
+//! Four keyframes \e frameStep frames apart (0: all at the first frame's pose) added to \e opt.
+std::vector<KeyframePtr> addFourKeyframes(WindowOptimizer &opt, const TestScene &scene, unsigned int frameStep,
+                                          int points)
+{
+  std::vector<KeyframePtr> kfs;
+  for (int k = 0; k < 4; ++k) {
+    kfs.push_back(scene.makeKeyframe(static_cast<unsigned int>(k) * frameStep, k, points));
+    opt.addKeyframe(kfs.back());
+  }
+  return kfs;
+}
+
 //! Status counts of the first \e count points of \e kf and of the others.
 void countStatuses(const Keyframe &kf, size_t count, int &flaggedOutliers, int &othersMarginalized)
 {
@@ -270,11 +282,7 @@ TEST(WindowMarginalization, PointsOnADepthPriorAreStoredOnlyOnceTheWindowMeasure
   // Keyframes 4 frames apart: every depth is measured, so an optimisation clears the flags.
   {
     WindowOptimizer opt(scene.params);
-    std::vector<KeyframePtr> kfs;
-    for (int k = 0; k < 4; ++k) {
-      kfs.push_back(scene.makeKeyframe(static_cast<unsigned int>(k) * 4u, k, kPoints));
-      opt.addKeyframe(kfs.back());
-    }
+    const std::vector<KeyframePtr> kfs = addFourKeyframes(opt, scene, 4u, kPoints);
     flagOnPrior(*kfs[0], kFlagged);
     opt.optimize(3);
     int stillFlagged = 0;
@@ -289,11 +297,7 @@ TEST(WindowMarginalization, PointsOnADepthPriorAreStoredOnlyOnceTheWindowMeasure
   // The same keyframes marginalised before any optimisation saw them: the flagged points are dropped, not the others.
   {
     WindowOptimizer opt(scene.params);
-    std::vector<KeyframePtr> kfs;
-    for (int k = 0; k < 4; ++k) {
-      kfs.push_back(scene.makeKeyframe(static_cast<unsigned int>(k) * 4u, k, kPoints));
-      opt.addKeyframe(kfs.back());
-    }
+    const std::vector<KeyframePtr> kfs = addFourKeyframes(opt, scene, 4u, kPoints);
     flagOnPrior(*kfs[0], kFlagged);
     opt.marginalizeKeyframe(0);
     countStatuses(*kfs[0], kFlagged, flaggedOutliers, othersMarginalized);
@@ -304,11 +308,7 @@ TEST(WindowMarginalization, PointsOnADepthPriorAreStoredOnlyOnceTheWindowMeasure
   // measured, the flags stay through an optimisation and the flagged points are dropped.
   {
     WindowOptimizer opt(scene.params);
-    std::vector<KeyframePtr> kfs;
-    for (int k = 0; k < 4; ++k) {
-      kfs.push_back(scene.makeKeyframe(0u, k, kPoints));
-      opt.addKeyframe(kfs.back());
-    }
+    const std::vector<KeyframePtr> kfs = addFourKeyframes(opt, scene, 0u, kPoints);
     flagOnPrior(*kfs[0], kFlagged);
     opt.optimize(3);
     int stillFlagged = 0;
