@@ -283,16 +283,24 @@ void LocalMapper::activatePoints(const Keyframe &newest)
     PointActivationResult r =
         m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, c.idepth, pt.patch, pt.patchWeight, kActivationIterations);
     double priorIdepth = 0., priorWeight = 0.;
-    if (!r.accepted && rotationIdepth > 0. && r.inlierResiduals >= kMinRotationPointInliers &&
-        m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * rotationIdepth <
-            m.params.mapper.rotationFlowPx) {
-      // The prior: the window's median inverse depth, inside the interval the traces left, one sigma its own size.
-      priorIdepth =
+    if (!r.accepted && rotationIdepth > 0. && r.inlierResiduals >= kMinRotationPointInliers) {
+      // The prior: the window's median inverse depth, inside the interval the traces left, one standard deviation
+      // the median's size. Only when even that depth would move less than rotationFlowPx from host to newest.
+      const double idepth =
           std::min(std::max(rotationIdepth, static_cast<double>(c.idepthMin)), static_cast<double>(c.idepthMax));
-      priorWeight = 1. / (priorIdepth * priorIdepth);
-      r = m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, priorIdepth, pt.patch, pt.patchWeight,
-                                       kActivationIterations, priorIdepth, priorWeight);
-      r.accepted = std::isfinite(r.energy) && r.idepth > 0. && r.inlierResiduals >= kMinRotationPointInliers;
+      const double flowPx = m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * idepth;
+      if (idepth > 0. && flowPx < m.params.mapper.rotationFlowPx) {
+        PointActivationResult onPrior =
+            m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, idepth, pt.patch, pt.patchWeight, kActivationIterations,
+                                         idepth, 1. / (rotationIdepth * rotationIdepth));
+        onPrior.accepted =
+            std::isfinite(onPrior.energy) && onPrior.idepth > 0. && onPrior.inlierResiduals >= kMinRotationPointInliers;
+        if (onPrior.accepted) {
+          r = onPrior;
+          priorIdepth = idepth;
+          priorWeight = 1. / (rotationIdepth * rotationIdepth);
+        }
+      }
     }
     if (r.accepted) {
       MapPoint mp = PointActivation::makeMapPoint(pt);
@@ -384,8 +392,9 @@ void LocalMapper::buildReferencePoints()
                                static_cast<float>(weight), out)) {
         m.referencePoints.push_back(out);
       }
-      if (p.hasOrb && p.isCorner) {
-        // Every active corner, also one outside the reference image: the new frame may see it. Gradient pixels
+      if (p.hasOrb && p.isCorner && !p.depthFromPrior) {
+        // Every active corner whose depth was measured, also one outside the reference image: the new frame may
+        // see it (a guessed depth would place its 3D point wrong for the pose-only step). Gradient pixels
         // are left out: their descriptor is taken on an edge, where no FAST keypoint of the new frame sits at the
         // same place, so their matches bias the pose (share of matches kept by the pose-only step, fast preset:
         // 7-Scenes 56 % -> 73 %, Tsukuba 59 % -> 74 %, KITTI 72 % -> 83 % with corners only).

@@ -181,7 +181,8 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
   const SE3d wMh = kf.frame->cMw.inverse();
   constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
   for (const MapPoint &p : kf.points) {
-    const bool kept = p.status == PointStatus::marginalized || (withActivePoints && p.status == PointStatus::active);
+    const bool kept = p.status == PointStatus::marginalized ||
+                      (withActivePoints && p.status == PointStatus::active && !p.depthFromPrior);
     if (!kept || !(p.idepth > 0.) || !std::isfinite(p.idepthVar)) {
       continue;
     }
@@ -373,6 +374,11 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
       MapPoint &p = host->points[keypointToPoint[static_cast<size_t>(match.keypoint)]];
       if (p.fromGlobalMap || std::fabs(match.idepth - p.idepth) > g.fusionSigmas * std::sqrt(p.idepthVar)) {
         continue;
+      }
+      if (p.depthFromPrior) {
+        // Its depth was a guess made while the camera turned: the stored point's measured one replaces the guess.
+        p.depthFromPrior = false;
+        p.idepthPriorWeight = 0.;
       }
       double var = 0.;
       p.idepth = fuseInverseVariance(p.idepth, p.idepthVar, match.idepth, match.idepthVar, var);

@@ -193,7 +193,7 @@ Sim3Estimate LocalMapper::verifyLoop(const Keyframe &newest, int candidate, int 
     const SE3d newMhost = newest.frame->cMw * host->frame->cMw.inverse();
     for (size_t i = 0; i < host->points.size(); ++i) {
       const MapPoint &pt = host->points[i];
-      if (pt.status != PointStatus::active || !pt.hasOrb || !pt.isCorner || !(pt.idepth > 0.)) {
+      if (pt.status != PointStatus::active || !pt.hasOrb || !pt.isCorner || !(pt.idepth > 0.) || pt.depthFromPrior) {
         continue;
       }
       LoopPoint lp;
