@@ -272,44 +272,29 @@ void LocalMapper::activatePoints(const Keyframe &newest)
   erase.reserve(plan.drop.size() + plan.activate.size());
   // A camera turning in place measures no depth: every candidate fails the Hessian test and the window empties.
   // Then candidates whose residuals agree are kept on a weak prior (mapper.rotationFlowPx).
-  const double rotationIdepth =
+  const double medianIdepth =
       m.params.mapper.rotationFlowPx > 0. && activePointCount() < m.params.features.desiredPointDensity
           ? medianActiveIdepth()
           : 0.;
-  int onPrior = 0;
+  int keptOnPrior = 0;
   for (const ActivationCandidate &c : plan.activate) {
     Keyframe &host = *m_window[static_cast<size_t>(c.ref.windowIndex)];
     const ImmaturePoint &pt = host.immature[static_cast<size_t>(c.ref.pointIndex)];
     PointActivationResult r =
         m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, c.idepth, pt.patch, pt.patchWeight, kActivationIterations);
     double priorIdepth = 0., priorWeight = 0.;
-    if (!r.accepted && rotationIdepth > 0. && r.inlierResiduals >= kMinRotationPointInliers) {
-      // The prior: the window's median inverse depth, inside the interval the traces left, one standard deviation
-      // the median's size. Only when even that depth would move less than rotationFlowPx from host to newest.
-      const double idepth =
-          std::min(std::max(rotationIdepth, static_cast<double>(c.idepthMin)), static_cast<double>(c.idepthMax));
-      const double flowPx = m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * idepth;
-      if (idepth > 0. && flowPx < m.params.mapper.rotationFlowPx) {
-        PointActivationResult onPrior =
-            m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, idepth, pt.patch, pt.patchWeight, kActivationIterations,
-                                         idepth, 1. / (rotationIdepth * rotationIdepth));
-        onPrior.accepted =
-            std::isfinite(onPrior.energy) && onPrior.idepth > 0. && onPrior.inlierResiduals >= kMinRotationPointInliers;
-        if (onPrior.accepted) {
-          r = onPrior;
-          priorIdepth = idepth;
-          priorWeight = 1. / (rotationIdepth * rotationIdepth);
-        }
-      }
-    }
+    const bool onPrior =
+        !r.accepted && activateOnDepthPrior(newest, host, c, medianIdepth, r, priorIdepth, priorWeight);
     if (r.accepted) {
       MapPoint mp = PointActivation::makeMapPoint(pt);
       mp.idepth = r.idepth;
       mp.idepthVar = 1. / r.idepthHessian;
-      mp.idepthPrior = priorIdepth;
-      mp.idepthPriorWeight = priorWeight;
-      mp.depthFromPrior = priorWeight > 0.;
-      onPrior += mp.depthFromPrior ? 1 : 0;
+      if (onPrior) {
+        mp.idepthPrior = priorIdepth;
+        mp.idepthPriorWeight = priorWeight;
+        mp.depthFromPrior = true;
+        ++keptOnPrior;
+      }
       host.points.push_back(mp);
       erase.push_back(c.ref);
     } else if (r.inlierResiduals == 0) {
@@ -317,10 +302,41 @@ void LocalMapper::activatePoints(const Keyframe &newest)
     }
   }
   PointActivation::eraseImmaturePoints(m_window, erase);
-  if (onPrior > 0) {
-    VP_HSLAM_LOG(vpHSlamLog::debug,
-                 "keyframe " << newest.id() << ": " << onPrior << " points activated on a depth prior (no baseline)");
+  if (keptOnPrior > 0) {
+    VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << newest.id() << ": " << keptOnPrior
+                                                << " points activated on a depth prior (no baseline)");
   }
+}
+
+bool LocalMapper::activateOnDepthPrior(const Keyframe &newest, const Keyframe &host, const ActivationCandidate &c,
+                                       double medianIdepth, PointActivationResult &r, double &priorIdepth,
+                                       double &priorWeight) const
+{
+  const Impl &m = *m_impl;
+  if (!(medianIdepth > 0.) || r.inlierResiduals < kMinRotationPointInliers) {
+    return false;
+  }
+  // The prior: the window's median inverse depth, inside the interval the traces left, one standard deviation the
+  // median's size. Only when even that depth would move less than rotationFlowPx from host to newest.
+  const double idepth =
+      std::min(std::max(medianIdepth, static_cast<double>(c.idepthMin)), static_cast<double>(c.idepthMax));
+  const double flowPx = m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * idepth;
+  if (!(idepth > 0.) || flowPx >= m.params.mapper.rotationFlowPx) {
+    return false;
+  }
+  const ImmaturePoint &pt = host.immature[static_cast<size_t>(c.ref.pointIndex)];
+  const double weight = 1. / (medianIdepth * medianIdepth);
+  PointActivationResult withPrior = m.optimizer.optimizeNewPoint(host.id(), pt.u, pt.v, idepth, pt.patch,
+                                                                 pt.patchWeight, kActivationIterations, idepth, weight);
+  if (!std::isfinite(withPrior.energy) || !(withPrior.idepth > 0.) ||
+      withPrior.inlierResiduals < kMinRotationPointInliers) {
+    return false; // r stays as it was: a refused candidate with inliers is traced on
+  }
+  withPrior.accepted = true;
+  r = withPrior;
+  priorIdepth = idepth;
+  priorWeight = weight;
+  return true;
 }
 
 void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)

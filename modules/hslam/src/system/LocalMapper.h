@@ -39,8 +39,10 @@
 
 namespace hslam
 {
+struct ActivationCandidate;
 class CoarseTracker;
 struct CoarseTrackerPoint;
+struct PointActivationResult;
 struct ReferenceFeature;
 class OrbVocabulary;
 struct TwoViewInitialization;
@@ -231,6 +233,15 @@ private:
   void activatePoints(const Keyframe &newest);
   //! Median inverse depth of the window's active points (each in its host), 0 when there is none.
   double medianActiveIdepth() const;
+  /*!
+    Turning in place: candidate \e c of \e host, refused by the Hessian test, is kept on a weak prior at
+    \e medianIdepth (clamped into its interval) when the translation from \e host to \e newest moves that depth by
+    less than mapper.rotationFlowPx and its residuals agree. Then \e r, \e priorIdepth and \e priorWeight (1 /
+    variance) are set and true returned.
+  */
+  bool activateOnDepthPrior(const Keyframe &newest, const Keyframe &host, const ActivationCandidate &c,
+                            double medianIdepth, PointActivationResult &r, double &priorIdepth,
+                            double &priorWeight) const;
   //! Optimise, check, build the tracking reference, drop points out of view, new immature points, marginalise.
   void finishKeyframe(const KeyframePtr &kf, int seedKeyframe = -1);
   void buildReferencePoints();
