@@ -19,6 +19,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <vector>
 
 namespace hslam
 {
@@ -265,17 +267,17 @@ void LocalMapper::activatePoints(const Keyframe &newest)
 {
   Impl &m = *m_impl;
   // DSO activatePointsMT: adapt the minimum distance to the active count, distance map over the newest keyframe.
-  m.activation.adaptMinDistance(activePointCount(), m.params.features.desiredPointDensity);
+  const int activeCount = activePointCount();
+  m.activation.adaptMinDistance(activeCount, m.params.features.desiredPointDensity);
   m.activation.buildDistanceMap(m_window, newest);
   const ActivationPlan plan = m.activation.selectPoints(m_window, newest);
   std::vector<ImmaturePointRef> erase = plan.drop;
   erase.reserve(plan.drop.size() + plan.activate.size());
   // A camera turning in place measures no depth: every candidate fails the Hessian test and the window empties.
   // Then candidates whose residuals agree are kept on a weak prior (mapper.rotationFlowPx).
-  const double medianIdepth =
-      m.params.mapper.rotationFlowPx > 0. && activePointCount() < m.params.features.desiredPointDensity
-          ? medianActiveIdepth()
-          : 0.;
+  const double medianIdepth = m.params.mapper.rotationFlowPx > 0. && activeCount < m.params.features.desiredPointDensity
+                                  ? medianActiveIdepth()
+                                  : 0.;
   int keptOnPrior = 0;
   for (const ActivationCandidate &c : plan.activate) {
     Keyframe &host = *m_window[static_cast<size_t>(c.ref.windowIndex)];
@@ -337,6 +339,24 @@ bool LocalMapper::activateOnDepthPrior(const Keyframe &newest, const Keyframe &h
   priorIdepth = idepth;
   priorWeight = weight;
   return true;
+}
+
+double LocalMapper::medianActiveIdepth() const
+{
+  std::vector<double> idepths;
+  for (const KeyframePtr &kf : m_window) {
+    for (const MapPoint &p : kf->points) {
+      if (p.status == PointStatus::active && p.idepth > 0.) {
+        idepths.push_back(p.idepth);
+      }
+    }
+  }
+  if (idepths.empty()) {
+    return 0.;
+  }
+  auto mid = idepths.begin() + static_cast<std::ptrdiff_t>(idepths.size() / 2);
+  std::nth_element(idepths.begin(), mid, idepths.end());
+  return *mid;
 }
 
 void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)

@@ -141,6 +141,8 @@ public:
   ReuseStatistics reuseStatistics() const;
   //! True when marginalised keyframes are kept (system.mode is not vo-strict).
   bool keepsGlobalMap() const;
+  //! The same rule for a mode, before any mapper exists (the system decides from it what to load).
+  static bool keepsGlobalMap(vpHSlamParameters::Mode mode) { return mode != vpHSlamParameters::modeVoStrict; }
   const GlobalMap &globalMap() const { return m_globalMap; }
   // ---- loops (system.mode slam)
   //! A verified loop.

@@ -158,7 +158,7 @@ void LocalMapper::refreshAnchors()
 
 bool LocalMapper::keepsGlobalMap() const
 {
-  return m_impl->params.system.mode != vpHSlamParameters::modeVoStrict;
+  return keepsGlobalMap(m_impl->params.system.mode);
 }
 
 GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoints) const

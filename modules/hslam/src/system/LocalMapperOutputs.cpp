@@ -8,8 +8,6 @@
 
 #include "tracking/CoarseTracker.h"
 
-#include <algorithm>
-#include <cstddef>
 #include <vector>
 
 namespace hslam
@@ -79,24 +77,6 @@ int LocalMapper::activePointCount() const
     }
   }
   return n;
-}
-
-double LocalMapper::medianActiveIdepth() const
-{
-  std::vector<double> idepths;
-  for (const KeyframePtr &kf : m_window) {
-    for (const MapPoint &p : kf->points) {
-      if (p.status == PointStatus::active && p.idepth > 0.) {
-        idepths.push_back(p.idepth);
-      }
-    }
-  }
-  if (idepths.empty()) {
-    return 0.;
-  }
-  auto mid = idepths.begin() + static_cast<std::ptrdiff_t>(idepths.size() / 2);
-  std::nth_element(idepths.begin(), mid, idepths.end());
-  return *mid;
 }
 
 int LocalMapper::immaturePointCount() const

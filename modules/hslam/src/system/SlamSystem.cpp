@@ -41,8 +41,8 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
   // Relocalisation needs the keyframe database: with hybrid / indirect tracking, and with direct tracking in the
   // modes that keep a global map (vo-reuse, slam), where a lost camera is found again in the stored keyframes.
   const bool direct = m_params.tracking.mode == vpHSlamParameters::trackingDirect;
-  const bool keepsMap = m_params.system.mode != vpHSlamParameters::modeVoStrict;
-  const bool relocalizes = m_params.tracking.relocalize && (!direct || keepsMap);
+  const bool relocalizes =
+      m_params.tracking.relocalize && (!direct || LocalMapper::keepsGlobalMap(m_params.system.mode));
   // The vocabulary: relocalisation, loop detection (slam mode) and localisation in a loaded map.
   if (relocalizes || m_params.system.mode == vpHSlamParameters::modeSlam || m_params.system.localizationOnly) {
     const std::string path = vpHSlamVocabulary::defaultPath();
