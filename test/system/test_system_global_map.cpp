@@ -111,9 +111,10 @@ constexpr unsigned int kFramesAfterTurn = 60;
   The synthetic room's two laps (fast enough for the test: 200 frames a lap) with a half turn in place in the second:
   after frame \e turnAt the camera turns 180 degrees about its vertical axis and back, 3 degrees a frame, then goes
   on with the lap for kFramesAfterTurn frames. Keyframes made while turning triangulate nothing: without the points
-  kept on a depth prior (mapper.rotationFlowPx) the window empties.
+  kept on a depth prior (mapper.rotationFlowPx) the window empties. With \e pivotBehind > 0 the camera turns about a
+  vertical axis that far behind its optical centre (a hand-held turn: the camera moves on an arc of that radius).
 */
-TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt)
+TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt, double pivotBehind = 0.)
 {
   vpHSlamSyntheticScene scene;
   scene.setLaps(kLaps);
@@ -139,7 +140,8 @@ TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt)
     const int steps = static_cast<int>(kTurnDeg / kStepDeg);
     for (int j = 1; j <= 2 * steps; ++j) {
       const double angle = vpMath::rad(kStepDeg * (j <= steps ? j : 2 * steps - j));
-      const vpHomogeneousMatrix turned = wMc * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.);
+      const vpHomogeneousMatrix pivot(0., 0., -pivotBehind, 0., 0., 0.);
+      const vpHomogeneousMatrix turned = wMc * pivot * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.) * pivot.inverse();
       scene.renderAtPose(turned, I, 1000u + static_cast<unsigned int>(j));
       feed(turned);
     }
@@ -170,9 +172,9 @@ struct TurnOutcome {
   double ate = 0.;
 };
 
-TurnOutcome runTurnAndPrint(const vpHSlamParameters &params, const char *what)
+TurnOutcome runTurnAndPrint(const vpHSlamParameters &params, const char *what, double pivotBehind = 0.)
 {
-  const TurnRun r = runWithTurn(params, kFramesPerLap + 60);
+  const TurnRun r = runWithTurn(params, kFramesPerLap + 60, pivotBehind);
   TurnOutcome o{r.run.statistics, hslam_test::simAte(r.groundTruth, r.run.trajectory)};
   std::cout << "half turn in place in the second lap, " << what << ": " << o.stats.trackedFrames << " tracked, "
             << o.stats.lostFrames << " lost, " << o.stats.segments << " segment(s), "
@@ -184,7 +186,7 @@ TurnOutcome runTurnAndPrint(const vpHSlamParameters &params, const char *what)
 TEST(SystemGlobalMap, TurnInPlaceIsTrackedThroughWithPointsOnADepthPrior)
 {
   // The defaults: while the camera turns, new points whose depth no baseline measures are kept on a weak prior at
-  // the window's median depth, so the window never empties and no frame is lost (0 lost, ATE 0.068 m measured).
+  // the window's median depth, so the window never empties and no frame is lost (0 lost, ATE 0.073 m measured).
   if (hslam_test::vispImagesDir().empty()) {
     GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
   }
@@ -196,6 +198,22 @@ TEST(SystemGlobalMap, TurnInPlaceIsTrackedThroughWithPointsOnADepthPrior)
   EXPECT_EQ(o.stats.segments, 1u);
   EXPECT_EQ(o.stats.trackedFrames, o.stats.frames);
   EXPECT_LT(o.ate, 0.1);
+}
+
+TEST(SystemGlobalMap, HandHeldTurnIsTrackedThroughWithPointsOnADepthPrior)
+{
+  // A hand-held turn is not about the optical centre: here about an axis 10 cm behind it, so the camera moves 5 mm a
+  // frame while turning 3 degrees. The translation flow between host and newest keyframe then reaches 1-2 px, and
+  // with mapper.rotationFlowPx at 1 px the points of the turn were refused as in DSO: 3 frames lost, relocalised,
+  // ATE 0.24 m. With 2 px or more: every frame tracked, ATE 0.009 m.
+  if (hslam_test::vispImagesDir().empty()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found: no texture for the synthetic scene";
+  }
+  const TurnOutcome o = runTurnAndPrint(turnParameters(true, true), "hand-held (pivot 10 cm behind)", 0.1);
+  EXPECT_EQ(o.stats.lostFrames, 0u);
+  EXPECT_EQ(o.stats.segments, 1u);
+  EXPECT_EQ(o.stats.trackedFrames, o.stats.frames);
+  EXPECT_LT(o.ate, 0.05);
 }
 
 TEST(SystemGlobalMap, TurnInPlaceIsSeededAgainFromTheStoredMap)

@@ -323,7 +323,9 @@ bool LocalMapper::activateOnDepthPrior(const Keyframe &newest, const Keyframe &h
   const double idepth =
       std::min(std::max(medianIdepth, static_cast<double>(c.idepthMin)), static_cast<double>(c.idepthMax));
   const double flowPx = m.K0.fx * (newest.frame->cMw * host.frame->cMw.inverse()).translation().norm() * idepth;
-  if (!(idepth > 0.) || flowPx >= m.params.mapper.rotationFlowPx) {
+  // The threshold is given at 640 px width: the same motion gives the same decision at any resolution.
+  const double maxFlowPx = m.params.mapper.rotationFlowPx * m.width / kReferenceWidthPx;
+  if (!(idepth > 0.) || flowPx >= maxFlowPx) {
     return false;
   }
   const ImmaturePoint &pt = host.immature[static_cast<size_t>(c.ref.pointIndex)];

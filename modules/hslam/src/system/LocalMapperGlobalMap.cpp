@@ -25,8 +25,6 @@ namespace
 {
 //! Gauss-Newton iterations on a re-activated point's inverse depth (as for any activation).
 constexpr int kReactivationIterations = 3;
-//! The reuse radius is given at 640 px width; other widths scale it.
-constexpr double kReferenceWidthPx = 640.;
 
 OrbMatcherOptions reuseMatcherOptions(const vpHSlamParameters::GlobalMap &g, int width)
 {

@@ -24,6 +24,10 @@
 
 namespace hslam
 {
+//! Image width at which pixel thresholds are given (globalMap.reuseRadiusPx, mapper.rotationFlowPx); other widths
+//! scale them.
+constexpr double kReferenceWidthPx = 640.;
+
 struct LocalMapper::Impl {
   Impl(const vpHSlamParameters &p, const PinholeIntrinsics &K, int w, int h, bool calibrated, const OrbVocabulary *voc)
       : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),

@@ -117,11 +117,11 @@ public:
     double outlierResidualFraction = 0.3;     //!< a point with more than this fraction of outlier residuals is removed
     double traceMaxPixelSearch = 0.027;       //!< longest epipolar segment searched, fraction of (width + height) (DSO)
     //! Camera turning in place: a candidate that fails the Hessian test because the translation from its host to
-    //! the newest keyframe moves a point at the window's median depth by less than this (pixels) is kept, when its
-    //! residuals agree and the window has fewer than features.desiredPointDensity points, on a weak prior at that
-    //! median inverse depth (0: never; DSO drops such candidates, and a turn in place empties its window; README,
-    //! "Defaults", for the value)
-    double rotationFlowPx = 1.;
+    //! the newest keyframe moves a point at the window's median depth by less than this (pixels at 640 px width,
+    //! scaled with the image width) is kept, when its residuals agree and the window has fewer than
+    //! features.desiredPointDensity points, on a weak prior at that median inverse depth (0: never; DSO drops such
+    //! candidates, and a turn in place empties its window; README, "Defaults", for the value)
+    double rotationFlowPx = 4.;
   };
 
   //! Monocular initialisation (two-view from feature matches, then photometric refinement).
