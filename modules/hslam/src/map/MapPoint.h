@@ -79,6 +79,15 @@ inline PointStatus leavingStatus(const MapPoint &p)
   return p.depthFromPrior ? PointStatus::outlier : PointStatus::marginalized;
 }
 
+//! The depth guessed while the camera turned is measured now (by the window or a stored point): the point becomes
+//! an ordinary one, without the guess's prior.
+inline void forgetDepthGuess(MapPoint &p)
+{
+  p.depthFromPrior = false;
+  p.idepthPrior = 0.;
+  p.idepthPriorWeight = 0.;
+}
+
 //! Adds \e keyframeId to a sorted list of observer ids (no duplicate).
 inline void addObserver(std::vector<int> &observers, int keyframeId)
 {

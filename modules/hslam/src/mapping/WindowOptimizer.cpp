@@ -407,10 +407,7 @@ void WindowOptimizer::writeBack()
     // DSO's variance proxy: the inverse of the point's own (undamped) Hessian block.
     mp.idepthVar = p.Hpp > 0. ? 1. / p.Hpp : std::numeric_limits<double>::infinity();
     if (mp.depthFromPrior && p.Hpp - p.obs.priorWeight >= m_mapper.minIdepthHessianActivate) {
-      // The window measures its depth now, as it would to activate it: an ordinary point, the guess forgotten.
-      mp.depthFromPrior = false;
-      mp.idepthPrior = 0.;
-      mp.idepthPriorWeight = 0.;
+      forgetDepthGuess(mp); // the window measures its depth now, as it would to activate it
     }
     // Co-visibility: every keyframe in which the point had an inlier residual observes it.
     for (const WindowResidual &r : p.residuals) {

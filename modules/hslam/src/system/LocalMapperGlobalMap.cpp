@@ -374,9 +374,7 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
         continue;
       }
       if (p.depthFromPrior) {
-        // Its depth was a guess made while the camera turned: the stored point's measured one replaces the guess.
-        p.depthFromPrior = false;
-        p.idepthPriorWeight = 0.;
+        forgetDepthGuess(p); // the stored point's measured depth replaces the guess made while the camera turned
       }
       double var = 0.;
       p.idepth = fuseInverseVariance(p.idepth, p.idepthVar, match.idepth, match.idepthVar, var);
