@@ -13,6 +13,10 @@
 #   stride    large motion: tracked/frames and ATE per mode with --stride K for each K of STRIDES
 #   blackout  covered lens: BLACKOUT_SEQUENCE with --blackout BLACKOUT per mode, against the uninterrupted run:
 #             segments, tracked/frames, relocalisations attempted/succeeded, ATE
+#   focal     not in the default sections: how much the camera model weighs on FOCAL_SEQUENCE (default
+#             7scenes_redkitchen_000-299, whose RGB camera is uncalibrated): its camera.txt copied to $OUT with the
+#             focal length replaced by each of FOCALS ("fx" or "fx:fy", default "525 532.57:531.54 550 575 585"),
+#             the median ATE per mode over PERTURB_KEY = FOCAL_VALUES (default 475 480 ... 525, 11 runs)
 #   spread    how much one deterministic run says: per sequence and mode, runs with PERTURB_KEY set to each of
 #             PERTURB_VALUES (default: features.desiredImmatureDensity = 490 495 500 505 510, the fast preset's
 #             500 moved by up to 2 %), their ATEs and the median. A 2 % change of the point budget moves the ATE of
@@ -22,7 +26,7 @@
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-hybrid-bench), SEQUENCES
 # (space-separated folder names), MODES (default "direct indirect hybrid"), STRIDES (default "1 2 3 4 5 6 7 8"),
 # SECTIONS (default "ablation spread stride blackout"), PERTURB_KEY, PERTURB_VALUES, BLACKOUT_SEQUENCE (default 7scenes_redkitchen_000-299), BLACKOUT
-# (default 120:160), MAP_MODE (--mode of every run, default vo-strict).
+# (default 120:160), MAP_MODE (--mode of every run, default vo-strict), FOCAL_SEQUENCE, FOCALS, FOCAL_VALUES.
 set -uo pipefail # not -e: one failed run must not end the benchmark
 
 repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -44,6 +48,9 @@ perturb_key="${PERTURB_KEY:-features.desiredImmatureDensity}"
 perturb_values="${PERTURB_VALUES:-490 495 500 505 510}"
 blackout_sequence="${BLACKOUT_SEQUENCE:-7scenes_redkitchen_000-299}"
 blackout="${BLACKOUT:-120:160}"
+focal_sequence="${FOCAL_SEQUENCE:-7scenes_redkitchen_000-299}"
+focals="${FOCALS:-525 532.57:531.54 550 575 585}"
+focal_values="${FOCAL_VALUES:-475 480 485 490 495 500 505 510 515 520 525}"
 source "$repo/tutorials/benchmark-common.sh"
 
 available=()
@@ -129,6 +136,38 @@ if has_section blackout; then
     done
   else
     echo "$blackout_sequence: not found under $data, skipped"
+  fi
+  echo
+fi
+if has_section focal; then
+  echo "== camera model: $focal_sequence with its focal length replaced; median ATE over $perturb_key = $focal_values"
+  if [[ -f "$data/$focal_sequence/camera.txt" ]]; then
+    printf "%-16s" focal
+    for mode in $modes; do printf "  %-9s" "$mode"; done
+    echo
+    for focal in $focals; do
+      fx="${focal%%:*}"
+      fy="${focal#*:}"
+      camera="$out/$focal_sequence.focal-$fx-$fy.txt"
+      # DSO camera.txt: the first line is "Pinhole fx fy cx cy [k1]", the rest (sizes, rectification) is kept.
+      awk -v fx="$fx" -v fy="$fy" 'NR == 1 { $2 = fx; $3 = fy } { print }' "$data/$focal_sequence/camera.txt" > "$camera"
+      line="$(printf "%-16s" "$focal")"
+      for mode in $modes; do
+        ates=()
+        for value in $focal_values; do
+          prefix="$out/$focal_sequence.$mode.focal-$fx-$fy.p$value"
+          if run "$prefix" "$focal_sequence" --tracking-mode "$mode" --camera "$camera" --set "$perturb_key=$value"; then
+            ates+=("$(ate "$prefix")")
+          else
+            ates+=(nan)
+          fi
+        done
+        line+="$(printf "  %9s" "$(median "${ates[@]}")")"
+      done
+      echo "$line"
+    done
+  else
+    echo "$focal_sequence: no camera.txt under $data, skipped"
   fi
   echo
 fi
