@@ -4,6 +4,8 @@
 #include "HSlamTestData.h"
 #include "TrackingTestUtils.h"
 
+#include <visp3/core/vpMath.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -249,6 +251,52 @@ TEST_F(CoarseTrackerTest, hypothesesRecoverFromMisleadingVelocity)
   ASSERT_TRUE(tracker.trackWithHypotheses(frame, history, newMref, affine, result))
       << coarseTrackingStatusName(result.status);
   expectPose(newMref, target, "misleading history");
+}
+
+TEST_F(CoarseTrackerTest, indirectPoseIsTriedAfterTheConstantVelocityPrediction)
+{
+  // Hybrid tracking hands the pose of its indirect step to trackWithHypotheses(). With a motion history the
+  // constant-velocity prediction is tried first and the indirect pose second; without one, the indirect pose first.
+  REQUIRE_TEXTURES();
+  CoarseTracker tracker(params);
+  tracker.setReference(reference, points);
+  const unsigned int earlier = frameAtDistance(0.03), target = frameAtDistance(0.05);
+  ASSERT_GT(earlier, 0u);
+  ASSERT_GT(target, earlier);
+  auto exactHistory = [&](unsigned int frame) { // the last two frames at the new one's pose: the prediction is exact
+    CoarseMotionHistory history;
+    history.valid = true;
+    history.lastMref = history.prelastMref = hslam_test::groundTruthNewMref(scene, 0, frame);
+    return history;
+  };
+  Frame frame;
+  SE3d newMref;
+  AffineBrightness affine;
+  CoarseTrackingResult result;
+  // A first frame sets the RMSE that ends the hypotheses early.
+  hslam_test::makeFrame(scene, earlier, params, frame);
+  ASSERT_TRUE(tracker.trackWithHypotheses(frame, exactHistory(earlier), newMref, affine, result));
+
+  // An indirect pose 30 cm and 20 degrees away from the truth (wrong matches): the prediction wins at once.
+  hslam_test::makeFrame(scene, target, params, frame);
+  CoarseMotionHistory history = exactHistory(target);
+  Eigen::Matrix<double, 6, 1> xi;
+  xi << 0.3, 0., 0., 0., vpMath::rad(20.), 0.;
+  history.hasIndirectPose = true;
+  history.indirectMref = SE3d::exp(xi) * history.lastMref;
+  ASSERT_TRUE(tracker.trackWithHypotheses(frame, history, newMref, affine, result))
+      << coarseTrackingStatusName(result.status);
+  expectPose(newMref, target, "exact prediction, wrong indirect pose");
+  EXPECT_EQ(result.hypothesesTried, 1);
+
+  // No history: the indirect pose (here the truth) comes before "no motion from the reference".
+  CoarseMotionHistory noHistory;
+  noHistory.hasIndirectPose = true;
+  noHistory.indirectMref = hslam_test::groundTruthNewMref(scene, 0, target);
+  ASSERT_TRUE(tracker.trackWithHypotheses(frame, noHistory, newMref, affine, result))
+      << coarseTrackingStatusName(result.status);
+  expectPose(newMref, target, "no history, exact indirect pose");
+  EXPECT_EQ(result.hypothesesTried, 1);
 }
 
 TEST_F(CoarseTrackerTest, unrelatedImagesAreReportedAsFailures)

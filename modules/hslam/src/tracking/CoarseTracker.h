@@ -140,7 +140,7 @@ struct CoarseMotionHistory {
   SE3d lastMref;                //!< reference-to-last-frame transform
   SE3d prelastMref;             //!< reference-to-frame-before-last transform
   AffineBrightness lastAffine;  //!< (a, b) of the last frame: the start value of every hypothesis
-  bool hasIndirectPose = false; //!< the indirect step gave a pose: it is tried first
+  bool hasIndirectPose = false; //!< the indirect step gave a pose: tried after constant velocity (first if !valid)
   SE3d indirectMref;            //!< that pose (reference-to-new)
 };
 
