@@ -118,7 +118,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
   if (history.hasIndirectPose) {
     // Hybrid tracking: the pose of the indirect step (ORB matches) is tried right after the constant-velocity
     // prediction, or first when there is no prediction. Under smooth motion the prediction is the better start: the
-    // indirect pose rests on some 20-40 integer FAST pixels, and starting from it the alignment ended elsewhere
+    // indirect pose rests on some 20-50 integer FAST pixels, and starting from it the alignment ended elsewhere
     // (slam, 11 point budgets, 7-Scenes / Tsukuba / KITTI: 0.0535 m / 0.259 cm / 0.0240 m first, 0.0520 / 0.258 /
     // 0.0226 second; direct tracking 0.0507 / 0.261 / 0.0222). When the prediction fails its bound (large motion),
     // the indirect pose is next: with every K-th frame (K = 1-8) the same frames were tracked either way.
