@@ -53,6 +53,23 @@ focals="${FOCALS:-525 532.57:531.54 550 575 585}"
 focal_values="${FOCAL_VALUES:-475 480 485 490 495 500 505 510 515 520 525}"
 source "$repo/tutorials/benchmark-common.sh"
 
+# budget_median PREFIX SEQUENCE VALUES OPTIONS...: one run per value of $perturb_key in VALUES (files PREFIX.pVALUE.*);
+# sets budget_ates (the runs' ATEs) and budget_med (their median). Not in a subshell: run() counts the failures.
+budget_median() {
+  local prefix="$1" seq="$2" values="$3"
+  shift 3
+  local value
+  budget_ates=()
+  for value in $values; do
+    if run "$prefix.p$value" "$seq" "$@" --set "$perturb_key=$value"; then
+      budget_ates+=("$(ate "$prefix.p$value")")
+    else
+      budget_ates+=(nan)
+    fi
+  done
+  budget_med="$(median "${budget_ates[@]}")"
+}
+
 available=()
 for seq in $sequences; do
   if [[ -d "$data/$seq" ]]; then available+=("$seq"); else echo "$seq: not found under $data, skipped"; fi
@@ -78,16 +95,8 @@ if has_section spread; then
   echo "== spread: $perturb_key = $perturb_values; ATE of each run, then the median"
   for seq in "${available[@]}"; do
     for mode in $modes; do
-      ates=()
-      for value in $perturb_values; do
-        prefix="$out/$seq.$mode.p$value"
-        if run "$prefix" "$seq" --tracking-mode "$mode" --set "$perturb_key=$value"; then
-          ates+=("$(ate "$prefix")")
-        else
-          ates+=(nan)
-        fi
-      done
-      printf "%-28s %-8s median %8s   runs %s\n" "$seq" "$mode" "$(median "${ates[@]}")" "${ates[*]}"
+      budget_median "$out/$seq.$mode" "$seq" "$perturb_values" --tracking-mode "$mode"
+      printf "%-28s %-8s median %8s   runs %s\n" "$seq" "$mode" "$budget_med" "${budget_ates[*]}"
     done
   done
   echo
@@ -153,16 +162,9 @@ if has_section focal; then
       awk -v fx="$fx" -v fy="$fy" 'NR == 1 { $2 = fx; $3 = fy } { print }' "$data/$focal_sequence/camera.txt" > "$camera"
       line="$(printf "%-16s" "$focal")"
       for mode in $modes; do
-        ates=()
-        for value in $focal_values; do
-          prefix="$out/$focal_sequence.$mode.focal-$fx-$fy.p$value"
-          if run "$prefix" "$focal_sequence" --tracking-mode "$mode" --camera "$camera" --set "$perturb_key=$value"; then
-            ates+=("$(ate "$prefix")")
-          else
-            ates+=(nan)
-          fi
-        done
-        line+="$(printf "  %9s" "$(median "${ates[@]}")")"
+        budget_median "$out/$focal_sequence.$mode.focal-$fx-$fy" "$focal_sequence" "$focal_values" \
+          --tracking-mode "$mode" --camera "$camera"
+        line+="$(printf "  %9s" "$budget_med")"
       done
       echo "$line"
     done

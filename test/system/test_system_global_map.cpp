@@ -138,9 +138,9 @@ TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt, double
     const vpHomogeneousMatrix wMc = scene.getPose(i);
     constexpr double kStepDeg = 3., kTurnDeg = 180.;
     const int steps = static_cast<int>(kTurnDeg / kStepDeg);
+    const vpHomogeneousMatrix pivot(0., 0., -pivotBehind, 0., 0., 0.);
     for (int j = 1; j <= 2 * steps; ++j) {
       const double angle = vpMath::rad(kStepDeg * (j <= steps ? j : 2 * steps - j));
-      const vpHomogeneousMatrix pivot(0., 0., -pivotBehind, 0., 0., 0.);
       const vpHomogeneousMatrix turned = wMc * pivot * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.) * pivot.inverse();
       scene.renderAtPose(turned, I, 1000u + static_cast<unsigned int>(j));
       feed(turned);

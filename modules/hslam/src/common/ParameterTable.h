@@ -133,7 +133,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(mapper, maxTraceInterval, positive(), "interval length below which a point may activate, pixels"),
   HSLAM_PARAM(mapper, outlierResidualFraction, between(0., 1.), "remove a point with more outlier residuals"),
   HSLAM_PARAM(mapper, traceMaxPixelSearch, positive(), "longest epipolar segment searched, per (w+h)"),
-  HSLAM_PARAM(mapper, rotationFlowPx, atLeast(0.), "less translation flow (px at 640 wide): keep a new point on a depth prior"),
+  HSLAM_PARAM(mapper, rotationFlowPx, atLeast(0.), "flow below this (px, 640 wide): new point kept on a depth prior"),
 
   HSLAM_PARAM(initializer, minMatches, atLeast(8), "ORB matches needed to attempt a two-view solution"),
   HSLAM_PARAM(initializer, minParallaxDeg, between(0., 90.), "median triangulation angle required, degrees"),
