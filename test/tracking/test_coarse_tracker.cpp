@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 using namespace hslam;
@@ -297,6 +298,53 @@ TEST_F(CoarseTrackerTest, indirectPoseIsTriedAfterTheConstantVelocityPrediction)
       << coarseTrackingStatusName(result.status);
   expectPose(newMref, target, "no history, exact indirect pose");
   EXPECT_EQ(result.hypothesesTried, 1);
+}
+
+TEST(CoarseTrackerBound, aFailedLevelDoesNotLowerTheHypothesisBound)
+{
+  // trackWithHypotheses() bounds each hypothesis by the best RMSE per level so far (finest level first). The first
+  // hypothesis here succeeded: 6.28 / 4.03 / 6.07 at levels 0 / 1 / 2 (the hand-held turn's frame 315).
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  CoarseRmsePerLevel achieved;
+  achieved.fill(nan);
+  achieved[0] = 6.28;
+  achieved[1] = 4.03;
+  achieved[2] = 6.07;
+  const CoarseRmsePerLevel first = achieved;
+
+  // A hypothesis whose brightness collapsed at the coarsest level: its 1.53 there is no fit and bounds nothing.
+  CoarseTrackingResult collapsed;
+  collapsed.status = CoarseTrackingStatus::implausibleBrightness;
+  collapsed.failedLevel = 2;
+  collapsed.rmse[2] = 1.53;
+  CoarseTracker::lowerHypothesisBound(achieved, collapsed, false);
+  for (size_t l = 0; l < achieved.size(); ++l) {
+    EXPECT_TRUE(achieved[l] == first[l] || (std::isnan(achieved[l]) && std::isnan(first[l]))) << "level " << l;
+  }
+
+  // A hypothesis that passed level 2 at 5.5 and failed at level 1: level 2 is lowered, level 1 is not.
+  CoarseTrackingResult partial;
+  partial.status = CoarseTrackingStatus::tooManyOutliers;
+  partial.failedLevel = 1;
+  partial.rmse[2] = 5.5;
+  partial.rmse[1] = 0.5;
+  CoarseTracker::lowerHypothesisBound(achieved, partial, false);
+  EXPECT_DOUBLE_EQ(achieved[2], 5.5);
+  EXPECT_DOUBLE_EQ(achieved[1], 4.03);
+  EXPECT_DOUBLE_EQ(achieved[0], 6.28);
+
+  // A success lowers every level it beats, the finest included.
+  CoarseTrackingResult success;
+  success.success = true;
+  success.status = CoarseTrackingStatus::ok;
+  success.rmse[0] = 3.9;
+  success.rmse[1] = 4.1;
+  success.rmse[2] = 5.0;
+  CoarseTracker::lowerHypothesisBound(achieved, success, true);
+  EXPECT_DOUBLE_EQ(achieved[0], 3.9);
+  EXPECT_DOUBLE_EQ(achieved[1], 4.03);
+  EXPECT_DOUBLE_EQ(achieved[2], 5.0);
+  EXPECT_TRUE(std::isnan(achieved[3]));
 }
 
 TEST_F(CoarseTrackerTest, unrelatedImagesAreReportedAsFailures)

@@ -111,6 +111,19 @@ void CoarseTracker::makeMotionHypotheses(const CoarseMotionHistory &history, std
   }
 }
 
+void CoarseTracker::lowerHypothesisBound(CoarseRmsePerLevel &achieved, const CoarseTrackingResult &attempt,
+                                         bool succeeded)
+{
+  for (size_t l = 0; l < achieved.size(); ++l) {
+    if (!succeeded && static_cast<int>(l) == attempt.failedLevel) {
+      continue; // the RMSE of the level that failed (collapsed brightness, too many outliers) is no fit
+    }
+    if (!std::isfinite(achieved[l]) || achieved[l] > attempt.rmse[l]) {
+      achieved[l] = attempt.rmse[l];
+    }
+  }
+}
+
 bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotionHistory &history, SE3d &newMref,
                                         AffineBrightness &affine, CoarseTrackingResult &result)
 {
@@ -152,11 +165,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
       haveOneGood = true;
     }
     if (haveOneGood) {
-      for (size_t l = 0; l < achieved.size(); ++l) {
-        if (!std::isfinite(achieved[l]) || achieved[l] > attempt.rmse[l]) {
-          achieved[l] = attempt.rmse[l];
-        }
-      }
+      lowerHypothesisBound(achieved, attempt, good);
     }
     // Good enough compared to the last frame: stop (DSO setting_reTrackThreshold).
     if (haveOneGood && achieved[0] < m_lastRmse[0] * m_params.retrackResidualFactor) {
