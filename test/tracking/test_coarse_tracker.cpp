@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <vector>
 
 using namespace hslam;
 
@@ -302,49 +303,46 @@ TEST_F(CoarseTrackerTest, indirectPoseIsTriedAfterTheConstantVelocityPrediction)
 
 TEST(CoarseTrackerBound, aFailedLevelDoesNotLowerTheHypothesisBound)
 {
-  // trackWithHypotheses() bounds each hypothesis by the best RMSE per level so far (finest level first). The first
-  // hypothesis here succeeded: 6.28 / 4.03 / 6.07 at levels 0 / 1 / 2 (the hand-held turn's frame 315).
+  // trackWithHypotheses() bounds each hypothesis by the best RMSE per level so far (finest level first).
   const double nan = std::numeric_limits<double>::quiet_NaN();
+  // An attempt's outcome: its status, the level where it failed (-1: none) and its RMSE at levels 0, 1, 2.
+  auto attempt = [nan](CoarseTrackingStatus status, int failedLevel, double r0, double r1, double r2) {
+    CoarseTrackingResult a;
+    a.success = status == CoarseTrackingStatus::ok;
+    a.status = status;
+    a.failedLevel = failedLevel;
+    a.rmse.fill(nan);
+    a.rmse[0] = r0;
+    a.rmse[1] = r1;
+    a.rmse[2] = r2;
+    return a;
+  };
+  // The first hypothesis succeeded: 6.28 / 4.03 / 6.07 (the hand-held turn's frame 315).
   CoarseRmsePerLevel achieved;
   achieved.fill(nan);
-  achieved[0] = 6.28;
-  achieved[1] = 4.03;
-  achieved[2] = 6.07;
-  const CoarseRmsePerLevel first = achieved;
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 6.28, 4.03, 6.07), true);
+  const std::vector<double> first = {6.28, 4.03, 6.07};
+  auto expectBound = [&achieved](const std::vector<double> &expected, const char *what) {
+    for (size_t l = 0; l < expected.size(); ++l) {
+      EXPECT_DOUBLE_EQ(achieved[l], expected[l]) << what << ", level " << l;
+    }
+    EXPECT_TRUE(std::isnan(achieved[3])) << what;
+  };
+  expectBound(first, "first success");
 
   // A hypothesis whose brightness collapsed at the coarsest level: its 1.53 there is no fit and bounds nothing.
-  CoarseTrackingResult collapsed;
-  collapsed.status = CoarseTrackingStatus::implausibleBrightness;
-  collapsed.failedLevel = 2;
-  collapsed.rmse[2] = 1.53;
-  CoarseTracker::lowerHypothesisBound(achieved, collapsed, false);
-  for (size_t l = 0; l < achieved.size(); ++l) {
-    EXPECT_TRUE(achieved[l] == first[l] || (std::isnan(achieved[l]) && std::isnan(first[l]))) << "level " << l;
-  }
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::implausibleBrightness, 2, nan, nan, 1.53),
+                                      false);
+  expectBound(first, "brightness failure at level 2");
 
-  // A hypothesis that passed level 2 at 5.5 and failed at level 1: level 2 is lowered, level 1 is not.
-  CoarseTrackingResult partial;
-  partial.status = CoarseTrackingStatus::tooManyOutliers;
-  partial.failedLevel = 1;
-  partial.rmse[2] = 5.5;
-  partial.rmse[1] = 0.5;
-  CoarseTracker::lowerHypothesisBound(achieved, partial, false);
-  EXPECT_DOUBLE_EQ(achieved[2], 5.5);
-  EXPECT_DOUBLE_EQ(achieved[1], 4.03);
-  EXPECT_DOUBLE_EQ(achieved[0], 6.28);
+  // One that passed level 2 at 5.5 and failed at level 1: level 2 is lowered, level 1 is not.
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::tooManyOutliers, 1, nan, 0.5, 5.5),
+                                      false);
+  expectBound({6.28, 4.03, 5.5}, "failure at level 1");
 
   // A success lowers every level it beats, the finest included.
-  CoarseTrackingResult success;
-  success.success = true;
-  success.status = CoarseTrackingStatus::ok;
-  success.rmse[0] = 3.9;
-  success.rmse[1] = 4.1;
-  success.rmse[2] = 5.0;
-  CoarseTracker::lowerHypothesisBound(achieved, success, true);
-  EXPECT_DOUBLE_EQ(achieved[0], 3.9);
-  EXPECT_DOUBLE_EQ(achieved[1], 4.03);
-  EXPECT_DOUBLE_EQ(achieved[2], 5.0);
-  EXPECT_TRUE(std::isnan(achieved[3]));
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 3.9, 4.1, 5.0), true);
+  expectBound({3.9, 4.03, 5.0}, "second success");
 }
 
 TEST_F(CoarseTrackerTest, unrelatedImagesAreReportedAsFailures)
