@@ -320,7 +320,7 @@ TEST(CoarseTrackerBound, aFailedLevelDoesNotLowerTheHypothesisBound)
   // The first hypothesis succeeded: 6.28 / 4.03 / 6.07 (the hand-held turn's frame 315).
   CoarseRmsePerLevel achieved;
   achieved.fill(nan);
-  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 6.28, 4.03, 6.07), true);
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 6.28, 4.03, 6.07));
   const std::vector<double> first = {6.28, 4.03, 6.07};
   auto expectBound = [&achieved](const std::vector<double> &expected, const char *what) {
     for (size_t l = 0; l < expected.size(); ++l) {
@@ -331,17 +331,16 @@ TEST(CoarseTrackerBound, aFailedLevelDoesNotLowerTheHypothesisBound)
   expectBound(first, "first success");
 
   // A hypothesis whose brightness collapsed at the coarsest level: its 1.53 there is no fit and bounds nothing.
-  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::implausibleBrightness, 2, nan, nan, 1.53),
-                                      false);
+  CoarseTracker::lowerHypothesisBound(achieved,
+                                      attempt(CoarseTrackingStatus::implausibleBrightness, 2, nan, nan, 1.53));
   expectBound(first, "brightness failure at level 2");
 
   // One that passed level 2 at 5.5 and failed at level 1: level 2 is lowered, level 1 is not.
-  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::tooManyOutliers, 1, nan, 0.5, 5.5),
-                                      false);
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::tooManyOutliers, 1, nan, 0.5, 5.5));
   expectBound({6.28, 4.03, 5.5}, "failure at level 1");
 
   // A success lowers every level it beats, the finest included.
-  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 3.9, 4.1, 5.0), true);
+  CoarseTracker::lowerHypothesisBound(achieved, attempt(CoarseTrackingStatus::ok, -1, 3.9, 4.1, 5.0));
   expectBound({3.9, 4.03, 5.0}, "second success");
 }
 

@@ -210,7 +210,7 @@ public:
     every later hypothesis, the right one included (a hand-held turn about an axis 20 cm behind the camera, frame
     315: 1.53 against 6.07 at the coarsest level, and the frame kept a pose 5 cm off).
   */
-  static void lowerHypothesisBound(CoarseRmsePerLevel &achieved, const CoarseTrackingResult &attempt, bool succeeded);
+  static void lowerHypothesisBound(CoarseRmsePerLevel &achieved, const CoarseTrackingResult &attempt);
 
   //! Points with descriptors of the reference (set by the mapper with setReference(); empty in direct mode).
   void setReferenceFeatures(std::vector<ReferenceFeature> features) { m_features = std::move(features); }

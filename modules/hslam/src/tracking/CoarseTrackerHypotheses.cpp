@@ -111,11 +111,10 @@ void CoarseTracker::makeMotionHypotheses(const CoarseMotionHistory &history, std
   }
 }
 
-void CoarseTracker::lowerHypothesisBound(CoarseRmsePerLevel &achieved, const CoarseTrackingResult &attempt,
-                                         bool succeeded)
+void CoarseTracker::lowerHypothesisBound(CoarseRmsePerLevel &achieved, const CoarseTrackingResult &attempt)
 {
   for (size_t l = 0; l < achieved.size(); ++l) {
-    if (!succeeded && static_cast<int>(l) == attempt.failedLevel) {
+    if (!attempt.success && static_cast<int>(l) == attempt.failedLevel) {
       continue; // the RMSE of the level that failed (collapsed brightness, too many outliers) is no fit
     }
     if (!std::isfinite(achieved[l]) || achieved[l] > attempt.rmse[l]) {
@@ -165,7 +164,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
       haveOneGood = true;
     }
     if (haveOneGood) {
-      lowerHypothesisBound(achieved, attempt, good);
+      lowerHypothesisBound(achieved, attempt);
     }
     // Good enough compared to the last frame: stop (DSO setting_reTrackThreshold).
     if (haveOneGood && achieved[0] < m_lastRmse[0] * m_params.retrackResidualFactor) {
