@@ -301,6 +301,39 @@ TEST_F(CoarseTrackerTest, indirectPoseIsTriedAfterTheConstantVelocityPrediction)
   EXPECT_EQ(result.hypothesesTried, 1);
 }
 
+TEST_F(CoarseTrackerTest, aRepeatedImageDoesNotMakeTheNextFrameTryEveryHypothesis)
+{
+  // A camera that delivers an image twice: the repeat, here the reference image itself, aligns with an RMSE near 0.
+  // The next frame is measured against the larger RMSE of the last two frames, so an exact prediction still ends
+  // the hypotheses at once (against the repeat's alone, all 57 ran).
+  REQUIRE_TEXTURES();
+  CoarseTracker tracker(params);
+  tracker.setReference(reference, points);
+  auto exactHistory = [&](unsigned int frame) { // the last two frames at the new one's pose: the prediction is exact
+    CoarseMotionHistory history;
+    history.valid = true;
+    history.lastMref = history.prelastMref = hslam_test::groundTruthNewMref(scene, 0, frame);
+    return history;
+  };
+  const unsigned int moved = frameAtDistance(0.03), next = frameAtDistance(0.05);
+  ASSERT_GT(moved, 0u);
+  ASSERT_GT(next, moved);
+  Frame frame;
+  SE3d newMref;
+  AffineBrightness affine;
+  CoarseTrackingResult result;
+  hslam_test::makeFrame(scene, moved, params, frame);
+  ASSERT_TRUE(tracker.trackWithHypotheses(frame, exactHistory(moved), newMref, affine, result));
+  const double movedRmse = result.rmse[0];
+  ASSERT_TRUE(tracker.trackWithHypotheses(reference, exactHistory(0), newMref, affine, result));
+  ASSERT_LT(result.rmse[0], 0.1 * movedRmse) << "the repeated image should align almost exactly";
+  hslam_test::makeFrame(scene, next, params, frame);
+  ASSERT_TRUE(tracker.trackWithHypotheses(frame, exactHistory(next), newMref, affine, result))
+      << coarseTrackingStatusName(result.status);
+  expectPose(newMref, next, "frame after a repeated image");
+  EXPECT_EQ(result.hypothesesTried, 1);
+}
+
 TEST(CoarseTrackerBound, aFailedLevelDoesNotLowerTheHypothesisBound)
 {
   // trackWithHypotheses() bounds each hypothesis by the best RMSE per level so far (finest level first).

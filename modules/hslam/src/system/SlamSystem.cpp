@@ -146,7 +146,7 @@ void SlamSystem::adoptPreparedReference()
   if (!lock.owns_lock() || !m_preparedReady) {
     return; // the back end is preparing one: keep the current reference for this frame
   }
-  m_preparedTracker->setLastRmse(m_tracker->lastRmse()); // DSO's lastCoarseRMSE belongs to the system
+  m_preparedTracker->carryRecentRmseFrom(*m_tracker); // DSO's lastCoarseRMSE belongs to the system
   std::swap(m_tracker, m_preparedTracker);
   m_trackerRefKeyframe = m_preparedRefKeyframe;
   m_trackerRefAffine = m_preparedRefAffine;

@@ -93,6 +93,7 @@ CoarseTracker::CoarseTracker(const vpHSlamParameters::Tracker &params, bool phot
   // DSO starts with a large "last RMSE" so the first frame accepts its first good hypothesis.
   constexpr double kInitialLastRmse = 100.;
   m_lastRmse.fill(kInitialLastRmse);
+  m_prelastRmse.fill(kInitialLastRmse);
 }
 
 void CoarseTracker::setWarp(int level, const PyramidLevel &target, const SE3d &newMref, const AffineBrightness &affine,

@@ -123,6 +123,17 @@ void CoarseTracker::lowerHypothesisBound(CoarseRmsePerLevel &achieved, const Coa
   }
 }
 
+CoarseRmsePerLevel CoarseTracker::recentRmse() const
+{
+  CoarseRmsePerLevel recent = m_lastRmse;
+  for (size_t l = 0; l < recent.size(); ++l) {
+    if (!std::isfinite(recent[l]) || m_prelastRmse[l] > recent[l]) {
+      recent[l] = m_prelastRmse[l];
+    }
+  }
+  return recent;
+}
+
 bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotionHistory &history, SE3d &newMref,
                                         AffineBrightness &affine, CoarseTrackingResult &result)
 {
@@ -137,6 +148,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
     const auto at = history.valid ? m_hypotheses.begin() + 1 : m_hypotheses.begin();
     m_hypotheses.insert(at, history.indirectMref);
   }
+  const CoarseRmsePerLevel recent = recentRmse();
   CoarseRmsePerLevel achieved;
   achieved.fill(std::numeric_limits<double>::quiet_NaN());
   bool haveOneGood = false;
@@ -152,8 +164,8 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
       firstAttempt = attempt;
       if (!good) {
         for (size_t l = 0; l < achieved.size(); ++l) {
-          if (std::isfinite(m_lastRmse[l])) {
-            achieved[l] = kHopelessRmseFactor * m_lastRmse[l];
+          if (std::isfinite(recent[l])) {
+            achieved[l] = kHopelessRmseFactor * recent[l];
           }
         }
       }
@@ -167,7 +179,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
       lowerHypothesisBound(achieved, attempt);
     }
     // Good enough compared to the last frame: stop (DSO setting_reTrackThreshold).
-    if (haveOneGood && achieved[0] < m_lastRmse[0] * m_params.retrackResidualFactor) {
+    if (haveOneGood && achieved[0] < recent[0] * m_params.retrackResidualFactor) {
       break;
     }
   }
@@ -180,6 +192,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
     return false;
   }
   result.hypothesesTried = tried;
+  m_prelastRmse = m_lastRmse;
   m_lastRmse = achieved;
   if (!std::isfinite(m_firstRmse)) {
     m_firstRmse = achieved[0];
