@@ -127,7 +127,7 @@ CoarseRmsePerLevel CoarseTracker::recentRmse() const
 {
   CoarseRmsePerLevel recent = m_lastRmse;
   for (size_t l = 0; l < recent.size(); ++l) {
-    if (!std::isfinite(recent[l]) || m_prelastRmse[l] > recent[l]) {
+    if (!std::isfinite(recent[l]) || m_prelastRmse[l] > m_params.retrackResidualFactor * recent[l]) {
       recent[l] = m_prelastRmse[l];
     }
   }
