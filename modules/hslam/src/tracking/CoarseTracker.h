@@ -229,8 +229,6 @@ public:
                                 Eigen::Matrix<double, 8, 8> *H = nullptr, Eigen::Matrix<double, 8, 1> *b = nullptr);
   //! Level-0 RMSE of the first frame tracked against this reference (DSO firstCoarseRMSE), NaN before.
   double firstRmse() const { return m_firstRmse; }
-  //! Best RMSE per level of the last successful trackWithHypotheses() (DSO lastCoarseRMSE).
-  const CoarseRmsePerLevel &lastRmse() const { return m_lastRmse; }
   /*!
     What the next frame's hypotheses are measured against: per level, the last successful frame's RMSE (DSO), or the
     one before when the last beat it by more than retrackResidualFactor. A repeated image (a camera delivering a
@@ -311,7 +309,7 @@ private:
   // Per-point buffers of the level being optimised (indexed by point; weight 0 = not a residual).
   std::vector<float> m_bufIdepth, m_bufU, m_bufV, m_bufDx, m_bufDy, m_bufResidual, m_bufWeight, m_bufRefColor;
   double m_firstRmse;
-  CoarseRmsePerLevel m_lastRmse;
+  CoarseRmsePerLevel m_lastRmse;    //!< best RMSE per level of the last successful frame (DSO lastCoarseRMSE)
   CoarseRmsePerLevel m_prelastRmse; //!< the successful frame's before m_lastRmse
   std::vector<SE3d> m_hypotheses;   //!< reused by trackWithHypotheses()
   std::vector<ReferenceFeature> m_features;

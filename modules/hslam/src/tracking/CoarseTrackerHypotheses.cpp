@@ -184,7 +184,7 @@ bool CoarseTracker::trackWithHypotheses(const Frame &newFrame, const CoarseMotio
     }
   }
   if (!haveOneGood) {
-    // m_lastRmse keeps the last successful frame's values: the bound of the next frame's hypotheses.
+    // m_lastRmse and m_prelastRmse keep the last successful frames' values: the next frame's bound (recentRmse()).
     result = firstAttempt;
     result.hypothesesTried = tried;
     newMref = m_hypotheses[0];
