@@ -216,6 +216,11 @@ void LocalMapper::traceAll(const Frame &frame)
   }
 }
 
+void LocalMapper::noteRelocalization()
+{
+  m_impl->relocalizedInSegment = true;
+}
+
 void LocalMapper::makeNonKeyframe(const FramePtr &frame)
 {
   traceAll(*frame);
@@ -380,7 +385,8 @@ void LocalMapper::finishKeyframe(const KeyframePtr &kf, int seedKeyframe)
                                               << summary.totalMs << " ms");
   // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong.
   const int checked = m.keyframesInSegment - kFirstCheckedKeyframe;
-  if (checked >= 0 && checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&
+  if (!m.relocalizedInSegment && checked >= 0 &&
+      checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&
       rmse > initRmseLimit(kInitRmseLimits[checked], m.initNoiseSigma)) {
     m_initializationFailed = true;
   }

@@ -123,6 +123,15 @@ public:
   */
   bool initializationFailed() const { return m_initializationFailed; }
 
+  /*!
+    A lost camera was relocalised into this segment's map (the relocalisation confirmed by the map's points): the
+    window RMSE check of the first keyframes stops for the segment. The first keyframe after a cover is taken from
+    far away and fits the window worse; that says the camera moved while lost, not that the initialisation was wrong,
+    and failing it discarded every frame tracked before the cover (7-Scenes, frames 60-100 black, point budget 510:
+    the 63 frames of the first keyframes dropped from the output).
+  */
+  void noteRelocalization();
+
   //! Drop the window (a new segment starts; the global map keeps the old segment's keyframes).
   void clear();
 

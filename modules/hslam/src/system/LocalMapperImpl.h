@@ -81,6 +81,9 @@ struct LocalMapper::Impl {
   int referenceKeyframe = -1;
   std::vector<KeyframeState> marginalizedStates; //!< keyframes that left since the last report
   int keyframesInSegment = 0;
+  //! A relocalisation confirmed against the map took place in this segment: its initialisation is not checked any
+  //! more (see LocalMapper::noteRelocalization()).
+  bool relocalizedInSegment = false;
   double initNoiseSigma = 0.; //!< image noise of the segment's first keyframe (estimateNoiseSigma), intensity units
   LoopConsistency loopConsistency;                          //!< candidate groups of the last loop queries
   int keyframeOfLastLoop = 0;                               //!< keyframesInSegment when the last loop was accepted

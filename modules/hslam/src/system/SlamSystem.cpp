@@ -313,6 +313,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     job.refMc = refMc;
     job.needKeyframe = needKeyframe;
     job.seedKeyframe = seedFromStoredMap ? m_storedMapFix.keyframeId : -1;
+    job.relocalized = relocalizedNow;
     deliver(std::move(job));
   }
   return vpHSlam::stateTracking;
@@ -491,6 +492,7 @@ void SlamSystem::reset()
     std::lock_guard<std::mutex> lock(m_queueMutex);
     m_pendingKeyframeRef = -1;
     m_pendingSeedKeyframe = -1;
+    m_pendingRelocalization = false;
   }
   m_state = vpHSlam::stateInitializing;
   m_frames = 0;

@@ -117,7 +117,8 @@ private:
     int referenceKeyframe = -1; //!< keyframe id the frame was tracked against
     SE3d refMc;                 //!< its pose relative to that keyframe
     bool needKeyframe = false;
-    int seedKeyframe = -1; //!< the frame seeds an emptied window: stored keyframe it was relocalised against
+    int seedKeyframe = -1;    //!< the frame seeds an emptied window: stored keyframe it was relocalised against
+    bool relocalized = false; //!< the frame was relocalised into the map (LocalMapper::noteRelocalization())
   };
 
   //! Not initialised yet: one two-view attempt (SlamSystemInitialization.cpp, like the backfill below).
@@ -240,8 +241,9 @@ private:
   std::condition_variable m_jobDone;      //!< the mapping thread finished a job
   bool m_stopMapping = false;
   bool m_mappingBusy = false;
-  int m_pendingKeyframeRef = -1;  //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
-  int m_pendingSeedKeyframe = -1; //!< a queued frame seeds the window from this stored keyframe (see MappingJob)
+  int m_pendingKeyframeRef = -1;        //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
+  int m_pendingSeedKeyframe = -1;       //!< a queued frame seeds the window from this stored keyframe (see MappingJob)
+  bool m_pendingRelocalization = false; //!< a queued frame was relocalised (see MappingJob)
 
   // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
   double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread

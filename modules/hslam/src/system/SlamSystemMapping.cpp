@@ -57,6 +57,7 @@ void SlamSystem::deliver(MappingJob job)
     if (job.seedKeyframe >= 0) {
       m_pendingSeedKeyframe = job.seedKeyframe; // served by the keyframe made next, whichever frame it is
     }
+    m_pendingRelocalization = m_pendingRelocalization || job.relocalized; // a skipped job must not lose it
     m_queue.push_back(std::move(job));
     // Bounded memory when mapping falls far behind: the oldest queued frames are dropped for mapping (their
     // keyframe request survives in m_pendingKeyframeRef; they keep their tracked pose).
@@ -104,6 +105,8 @@ void SlamSystem::mappingLoop()
     if (makeKeyframe) {
       m_pendingSeedKeyframe = -1;
     }
+    job.relocalized = m_pendingRelocalization;
+    m_pendingRelocalization = false;
     m_mappingBusy = true;
     lock.unlock();
     {
@@ -123,6 +126,9 @@ double SlamSystem::runJob(const MappingJob &job)
   // The reference keyframe may have moved since tracking: re-anchor (DSO makeKeyFrame / makeNonKeyFrame).
   const SE3d wMref = m_recorder.keyframePose(job.referenceKeyframe);
   job.frame->cMw = (wMref * job.refMc).inverse();
+  if (job.relocalized) {
+    m_mapper->noteRelocalization();
+  }
   if (!job.needKeyframe) {
     m_mapper->makeNonKeyframe(job.frame);
     m_runStats.addFrameMappingMs(nowMs() - t0);
