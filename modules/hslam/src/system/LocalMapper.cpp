@@ -252,10 +252,11 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId, int seedKe
   const double t2 = threadCpuMs();
   finishKeyframe(kf, seedKeyframe);
   if (m.relocalization) {
+    // The keyframe's bag-of-words vector: its corners, as a lost frame's (FAST keypoints) it is compared with.
     std::vector<OrbDescriptor> descriptors;
     descriptors.reserve(kf->immature.size());
     for (const ImmaturePoint &pt : kf->immature) {
-      if (pt.hasOrb) {
+      if (pt.hasOrb && pt.isCorner) {
         descriptors.push_back(pt.orb);
       }
     }

@@ -76,8 +76,8 @@ bool LocalMapper::indexGlobalMap()
     std::vector<OrbDescriptor> corners;
     const SE3d wMc = kf.cMw.inverse();
     for (const GlobalPoint &p : kf.points) {
-      if (!p.hasOrb) {
-        continue;
+      if (!p.hasOrb || !p.isCorner) {
+        continue; // corners only, as when the map was built (makeKeyframe, keyframePointsWorld)
       }
       described.push_back(p.orb);
       if (p.state == GlobalPointState::stored && p.idepth > 0.f) {
