@@ -167,7 +167,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     return vpHSlam::stateLost;
   }
   // Motion history from the recorded poses (DSO: from the frame shells, under the pose lock).
-  CoarseMotionHistory history;
+  CoarseMotionHistory history, coasting;
   SE3d wMref, wMlast, wMprelast;
   wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
   if (m_lastFrameId >= 0 && m_prelastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast) &&
@@ -192,11 +192,14 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
       m_runStats.addTrackingMs(nowMs() - t0);
       return vpHSlam::stateLost;
     }
-    if (!relocalizePose(frame, history) && history.valid) {
+    bool described = false;
+    if (!relocalizePose(frame, history, described) && history.valid) {
       // No place recognised: after a short loss the camera is often still near its last pose, where the hybrid
       // step (guided matching, then matching without a prediction and PnP against the window's corners) and the
       // joint alignment can find it; the same checks as any frame decide. Measured on 7-Scenes with frames
       // 120-125 black, fast preset: BoW candidates gave at most 15 matches, this found the camera at once.
+      // A camera on a vehicle kept moving instead: tried second, below.
+      coasting = described ? coastingHistory(history, frame->id) : CoarseMotionHistory();
       history.prelastMref = history.lastMref;
     }
   }
@@ -220,30 +223,12 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     success = true;
   }
   if (m_relocalizing && !seedFromStoredMap) {
-    // Accepted only when the map's corners confirm it too (tracking.relocalizationCheckInliers, 15 by default): a lost
-    // camera pointed at something new can be aligned photometrically to a wrong place (measured on 7-Scenes after
-    // covers of 15 and 40 frames: "successful" alignments with 0-3 ORB inliers, one with a gain change of e^-1.4).
-    // Right relocalisations after a 5-frame cover had 16-58 inliers; the former 20 (twice a tracked frame's) refused
-    // four of five of them in slam mode with direct tracking (point budgets 480-520).
-    // A relocalisation on the window's triangulated points is confirmed by its own matches too: the window's corners
-    // are few, and after a long cover the camera often sees them from too far away to match 15 (7-Scenes, frames
-    // 120-160 black: 4-8 corner inliers while 30-50 of those matches agreed with the aligned pose). The alignment's
-    // own checks (residuals, outliers, brightness) must have passed, and it must have stayed within the matches'
-    // 2.4 px (chi2, 2 dof, 95 %) of them.
-    const SE3d cMwAligned = newMref * wMref.inverse();
-    const int confirmedByRelocalization =
-        success ? countReprojectionInliers(cMwAligned, m_relocalizationEvidence, m_preprocessor.intrinsics(),
-                                           PoseOnlyOptions().chi2Threshold)
-                : 0;
-    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation check: alignment "
-                                             << (success ? "ok" : coarseTrackingStatusName(result.status)) << ", "
-                                             << m_indirect.matches << " ORB matches, " << m_indirect.inliers
-                                             << " inliers"
-                                             << (m_indirect.recovered ? " (found without prediction)" : "") << ", "
-                                             << confirmedByRelocalization << " of " << m_relocalizationEvidence.size()
-                                             << " relocalisation matches agree");
-    const int needed = m_params.tracking.relocalizationCheckInliers;
-    const bool confirmed = (m_indirect.usable && m_indirect.inliers >= needed) || confirmedByRelocalization >= needed;
+    bool confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, "");
+    if ((!success || !confirmed) && coasting.valid) {
+      success = estimatePose(frame, coasting, newMref, affine, result);
+      confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion kept)");
+      confirmed = confirmed || (success && coastingConfirmed(frame, coasting, newMref));
+    }
     if (!success || !confirmed) {
       m_runStats.addTrackingMs(nowMs() - t0);
       return vpHSlam::stateLost; // the relocalised pose did not hold against the map: try the next frame

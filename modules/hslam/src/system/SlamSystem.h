@@ -135,11 +135,29 @@ private:
   /*!
     Relocalisation of a lost frame (SlamSystemRelocalization.cpp): BoW candidates, ORB matching, PnP RANSAC and
     pose-only refinement; on success \e history holds the pose (no motion) for the joint refinement that follows.
+    \e described: the frame had features to match (false for a black frame).
   */
-  bool relocalizePose(const FramePtr &frame, CoarseMotionHistory &history);
+  bool relocalizePose(const FramePtr &frame, CoarseMotionHistory &history, bool &described);
   //! Keep \e r (a bag-of-words relocalisation of \e frame) as m_storedMapFix and say whether it agrees with the
   //! previous frame's.
   void recordStoredMapFix(const FramePtr &frame, const RelocalizationResult &r);
+  /*!
+    Whether a lost frame's alignment (\e aligned, pose \e cMwAligned) holds against the map: enough ORB inliers of
+    the indirect step, or enough of the relocalisation's own matches within reach (see the implementation).
+    \e attempt is appended to the debug message.
+  */
+  bool relocalizationConfirmed(const FramePtr &frame, bool aligned, const SE3d &cMwAligned,
+                               const CoarseTrackingResult &result, const char *attempt) const;
+  /*!
+    A lost camera that kept moving (a vehicle): \e history (last two tracked frames) continued with their motion up
+    to frame \e frameId. Invalid when no frame was lost between, or without a motion to continue.
+  */
+  CoarseMotionHistory coastingHistory(const CoarseMotionHistory &history, int frameId) const;
+  /*!
+    Whether an alignment from \e coasting (\e newMref, passed its photometric checks) ended where the continued
+    motion predicted: then the camera kept moving and the pose is taken without ORB confirmation.
+  */
+  bool coastingConfirmed(const FramePtr &frame, const CoarseMotionHistory &coasting, const SE3d &newMref) const;
   void adoptPreparedReference();
   bool keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result);
   void deliver(MappingJob job);
