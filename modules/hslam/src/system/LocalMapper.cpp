@@ -252,11 +252,12 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId, int seedKe
   const double t2 = threadCpuMs();
   finishKeyframe(kf, seedKeyframe);
   if (m.relocalization) {
-    // The keyframe's bag-of-words vector: its corners, as a lost frame's (FAST keypoints) it is compared with.
+    // The keyframe's bag-of-words vector: every selected point's descriptor (from its corners alone the synthetic
+    // loop's loops were found less often; README, "Hybrid tracking").
     std::vector<OrbDescriptor> descriptors;
     descriptors.reserve(kf->immature.size());
     for (const ImmaturePoint &pt : kf->immature) {
-      if (pt.hasOrb && pt.isCorner) {
+      if (pt.hasOrb) {
         descriptors.push_back(pt.orb);
       }
     }

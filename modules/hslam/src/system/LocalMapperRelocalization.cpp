@@ -76,11 +76,11 @@ bool LocalMapper::indexGlobalMap()
     std::vector<OrbDescriptor> corners;
     const SE3d wMc = kf.cMw.inverse();
     for (const GlobalPoint &p : kf.points) {
-      if (!p.hasOrb || !p.isCorner) {
-        continue; // corners only, as when the map was built (makeKeyframe, keyframePointsWorld)
+      if (!p.hasOrb) {
+        continue;
       }
       described.push_back(p.orb);
-      if (p.state == GlobalPointState::stored && p.idepth > 0.f) {
+      if (p.isCorner && p.state == GlobalPointState::stored && p.idepth > 0.f) { // as keyframePointsWorld()
         wX.push_back(wMc * m.K0.unproject(p.u, p.v, p.idepth));
         corners.push_back(p.orb);
       }
