@@ -53,6 +53,7 @@
 #include <deque>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -205,7 +206,10 @@ private:
     int keyframeId = -1;             //!< the stored keyframe PnP placed it against
     bool agreesWithPrevious = false; //!< the previous frame had a fix too, and the two agree (compareFixes)
   };
-  StoredMapFix m_storedMapFix;   //!< the last lost frame's fix (frameId -1: none)
+  StoredMapFix m_storedMapFix; //!< the last lost frame's fix (frameId -1: none)
+  //! Relocalised where the camera's motion continued (coastingConfirmed()): that motion per frame
+  //! (last_M_prelast), the velocity of the frame after it. Empty otherwise.
+  std::optional<SE3d> m_keptMotion;
   IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
