@@ -34,6 +34,29 @@ vpHSlamParameters fastPreset()
   params.system.deterministic = true;
   return params;
 }
+
+//! \e frames of \e folder (0: all) with frames coverBegin-coverEnd replaced by black images (a covered lens).
+hslam_test::SystemRun runCovered(const std::string &folder, unsigned int frames, const vpHSlamParameters &params,
+                                 unsigned int coverBegin, unsigned int coverEnd)
+{
+  return hslam_test::runSource(folder, frames, params,
+                               [&](const vpHSlamImageSource::Frame &f, vpImage<unsigned char> &I) {
+                                 if (f.index >= coverBegin && f.index <= coverEnd) {
+                                   I = vpImage<unsigned char>(I.getHeight(), I.getWidth(), 0);
+                                 }
+                               });
+}
+
+//! Frames after \e coverEnd until the first tracked one (-1: never); states[i] is frame i's.
+int framesUntilTracked(const std::vector<vpHSlam::State> &states, unsigned int coverEnd)
+{
+  for (size_t i = coverEnd + 1; i < states.size(); ++i) {
+    if (states[i] == vpHSlam::stateTracking) {
+      return static_cast<int>(i - coverEnd - 1);
+    }
+  }
+  return -1;
+}
 } // namespace
 
 TEST(SystemReal, KittiWholeSequenceFastPreset)
@@ -81,19 +104,8 @@ void expectSevenScenesCoverRelocalised(unsigned int frames, unsigned int coverBe
     params.features.desiredImmatureDensity = budget;
     ASSERT_EQ(params.tracking.mode, vpHSlamParameters::trackingDirect);
     const hslam_test::SystemRun plain = hslam_test::runSource(folder, frames, params);
-    const hslam_test::SystemRun covered = hslam_test::runSource(
-        folder, frames, params, [&](const vpHSlamImageSource::Frame &f, vpImage<unsigned char> &I) {
-          if (f.index >= coverBegin && f.index <= coverEnd) {
-            I = vpImage<unsigned char>(I.getHeight(), I.getWidth(), 0);
-          }
-        });
-    // Frames after the cover until the first tracked one (-1: never); states[i] is frame i's.
-    int firstTrackedAfter = -1;
-    for (size_t i = coverEnd + 1; i < covered.states.size() && firstTrackedAfter < 0; ++i) {
-      if (covered.states[i] == vpHSlam::stateTracking) {
-        firstTrackedAfter = static_cast<int>(i - coverEnd - 1);
-      }
-    }
+    const hslam_test::SystemRun covered = runCovered(folder, frames, params, coverBegin, coverEnd);
+    const int firstTrackedAfter = framesUntilTracked(covered.states, coverEnd);
     const vpHSlam::Statistics &stats = covered.statistics;
     const double atePlain = hslam_test::simAte(gt, plain.trajectory);
     const double ateCovered = hslam_test::simAte(gt, covered.trajectory);
@@ -144,12 +156,7 @@ TEST(SystemReal, SevenScenesEarlyCoverKeepsTheFramesTrackedBeforeIt)
     ASSERT_EQ(params.system.mode, vpHSlamParameters::modeSlam);
     ASSERT_EQ(params.tracking.mode, vpHSlamParameters::trackingDirect);
     const hslam_test::SystemRun plain = hslam_test::runSource(folder, frames, params);
-    const hslam_test::SystemRun covered = hslam_test::runSource(
-        folder, frames, params, [&](const vpHSlamImageSource::Frame &f, vpImage<unsigned char> &I) {
-          if (f.index >= coverBegin && f.index <= coverEnd) {
-            I = vpImage<unsigned char>(I.getHeight(), I.getWidth(), 0);
-          }
-        });
+    const hslam_test::SystemRun covered = runCovered(folder, frames, params, coverBegin, coverEnd);
     ASSERT_GT(covered.states.size(), static_cast<size_t>(coverBegin));
     size_t trackedBefore = 0;
     for (size_t i = 0; i < coverBegin; ++i) {
@@ -183,7 +190,8 @@ TEST(SystemReal, KittiCoverIsBridgedByTheMotionTheCarKept)
 {
   // Frames 25-34 black: the car drives on about 8 m. Nothing the window holds matches 15 ORB inliers when the images
   // return (4-7), and a new segment started (another scale, ATE 6.6 m over the run). The alignment from the motion
-  // continued over the lost frames ends within 0.06 of a step of it and is taken (see SlamSystem::coastingConfirmed).
+  // continued over the lost frames ends within 0.06 of a step of it and is taken (see SlamSystem::coastingConfirmed),
+  // and the next frame starts from that motion.
   HSLAM_REQUIRE_SHARED_DATA(folder, "kitti06_000-050");
   const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth_tum.txt");
   const unsigned int coverBegin = 25, coverEnd = 34;
@@ -191,32 +199,26 @@ TEST(SystemReal, KittiCoverIsBridgedByTheMotionTheCarKept)
     vpHSlamParameters params;
     params.system.deterministic = true;
     params.features.desiredImmatureDensity = budget;
-    const hslam_test::SystemRun covered =
-        hslam_test::runSource(folder, 0, params, [&](const vpHSlamImageSource::Frame &f, vpImage<unsigned char> &I) {
-          if (f.index >= coverBegin && f.index <= coverEnd) {
-            I = vpImage<unsigned char>(I.getHeight(), I.getWidth(), 0);
-          }
-        });
-    int firstTrackedAfter = -1;
-    for (size_t i = coverEnd + 1; i < covered.states.size() && firstTrackedAfter < 0; ++i) {
-      if (covered.states[i] == vpHSlam::stateTracking) {
-        firstTrackedAfter = static_cast<int>(i - coverEnd - 1);
-      }
-    }
+    const hslam_test::SystemRun plain = hslam_test::runSource(folder, 0, params);
+    const hslam_test::SystemRun covered = runCovered(folder, 0, params, coverBegin, coverEnd);
+    const int firstTrackedAfter = framesUntilTracked(covered.states, coverEnd);
     size_t trackedAfter = 0;
     for (size_t i = coverEnd + 1; i < covered.states.size(); ++i) {
       trackedAfter += covered.states[i] == vpHSlam::stateTracking ? 1 : 0;
     }
     const vpHSlam::Statistics &stats = covered.statistics;
     const double ate = hslam_test::simAte(gt, covered.trajectory);
+    const double atePlain = hslam_test::simAte(gt, plain.trajectory);
     std::cout << "KITTI 06 0-50, frames " << coverBegin << "-" << coverEnd << " black, budget " << budget
               << ": segments " << stats.segments << ", relocalisations " << stats.relocalizationsSucceeded << "/"
               << stats.relocalizationsAttempted << ", back after " << firstTrackedAfter << " frames, " << trackedAfter
-              << " of " << covered.states.size() - coverEnd - 1 << " tracked after, ATE " << ate << " m" << std::endl;
+              << " of " << covered.states.size() - coverEnd - 1 << " tracked after, ATE " << ate
+              << " m (without the cover " << atePlain << " m)" << std::endl;
     EXPECT_EQ(stats.segments, 1u) << "budget " << budget;
     EXPECT_GE(stats.relocalizationsSucceeded, 1u);
     EXPECT_EQ(firstTrackedAfter, 0) << "the first frame after the cover is placed";
     EXPECT_EQ(trackedAfter, covered.states.size() - coverEnd - 1);
-    EXPECT_LT(ate, 0.1); // metres; 0.021-0.022 m measured, 0.022 m without the cover
+    EXPECT_LE(ate, 1.5 * atePlain); // 0.020 / 0.021 m measured; 0.25 m for one of 21 covers before the motion
+                                    // was kept for the frame after the relocalisation
   }
 }
