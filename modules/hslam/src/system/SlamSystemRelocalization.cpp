@@ -2,13 +2,17 @@
  * H-SLAM for ViSP.
  */
 // Relocalisation of a lost frame into the current map (SlamSystem, tracking thread), and the stored-map fixes that
-// may seed an emptied window again. See SlamSystem.h.
+// may seed an emptied window again; the check that a relocalised pose holds (the map's points, or the motion a
+// moving camera kept). See SlamSystem.h.
 #include "system/SlamSystem.h"
 
 #include "system/LocalMapper.h"
 #include "tracking/Relocalizer.h"
 
+#include <visp3/core/vpMath.h>
 #include <visp3/hslam/vpHSlamLog.h>
+
+#include <cmath>
 
 namespace hslam
 {
@@ -24,7 +28,6 @@ constexpr double kMinCoastingSteps = 2.;
 //! away, one of them at a wrong place (ATE 28 cm if taken).
 constexpr double kCoastingMaxStepShare = 0.25;
 constexpr double kCoastingMaxRotationDeg = 2.;
-constexpr double kRadToDeg = 57.29577951308232;
 } // namespace
 
 bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &history, bool &described)
@@ -151,7 +154,7 @@ bool SlamSystem::coastingConfirmed(const FramePtr &frame, const CoarseMotionHist
   const SE3d step = coasting.lastMref * coasting.prelastMref.inverse();
   const double stepLength = step.translation().norm();
   const double offShare = stepLength > 0. ? off.translation().norm() / stepLength : HUGE_VAL;
-  const double offDeg = off.log().tail<3>().norm() * kRadToDeg;
+  const double offDeg = vpMath::deg(off.log().tail<3>().norm());
   const bool kept = offShare <= kCoastingMaxStepShare && offDeg <= kCoastingMaxRotationDeg;
   VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended " << offShare
                                            << " of a step and " << offDeg << " deg from it"
