@@ -190,7 +190,7 @@ TEST(SystemReal, KittiCoverIsBridgedByTheMotionTheCarKept)
 {
   // Frames 25-34 black: the car drives on about 8 m. Nothing the window holds matches 15 ORB inliers when the images
   // return (4-7), and a new segment started (another scale, ATE 6.6 m over the run). The alignment from the motion
-  // continued over the lost frames ends within 0.06 of a step of it and is taken (see SlamSystem::coastingConfirmed),
+  // continued over the lost frames ends within 0.06 of a step of it and is taken (see tracking/MotionContinuation.h),
   // and the next frame starts from that motion.
   HSLAM_REQUIRE_SHARED_DATA(folder, "kitti06_000-050");
   const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth_tum.txt");

@@ -5,6 +5,7 @@
 
 #include "mapping/TwoViewInitializer.h"
 #include "system/LocalMapper.h"
+#include "tracking/MotionContinuation.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamLog.h>
@@ -202,7 +203,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
       // joint alignment can find it; the same checks as any frame decide. Measured on 7-Scenes with frames
       // 120-125 black, fast preset: BoW candidates gave at most 15 matches, this found the camera at once.
       // A camera on a vehicle kept moving instead: tried second, below.
-      coasting = described ? coastingHistory(history, frame->id) : CoarseMotionHistory();
+      coasting = described ? continueMotion(history, lostSteps(frame->id)) : CoarseMotionHistory();
       history.prelastMref = history.lastMref;
     }
   }
@@ -230,7 +231,11 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     if ((!success || !confirmed) && coasting.valid) {
       success = estimatePose(frame, coasting, newMref, affine, result);
       confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion kept)");
-      if (!confirmed && success && coastingConfirmed(frame, coasting, newMref)) {
+      const ContinuedMotionCheck check = checkContinuedMotion(coasting, newMref);
+      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended "
+                                               << check.stepShare << " of a step and " << check.rotationDeg
+                                               << " deg from it" << (check.kept ? ": the camera kept moving" : ""));
+      if (!confirmed && success && check.kept) {
         confirmed = true;
         m_keptMotion = coasting.lastMref * coasting.prelastMref.inverse();
       }

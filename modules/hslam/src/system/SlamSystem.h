@@ -150,15 +150,10 @@ private:
   bool relocalizationConfirmed(const FramePtr &frame, bool aligned, const SE3d &cMwAligned,
                                const CoarseTrackingResult &result, const char *attempt) const;
   /*!
-    A lost camera that kept moving (a vehicle): \e history (last two tracked frames) continued with their motion up
-    to frame \e frameId. Invalid when no frame was lost between, or without a motion to continue.
+    Steps of the last two tracked frames' motion from the last one to frame \e frameId (frame ids count the frames
+    given, black ones included), for continueMotion(); 0 without two tracked frames.
   */
-  CoarseMotionHistory coastingHistory(const CoarseMotionHistory &history, int frameId) const;
-  /*!
-    Whether an alignment from \e coasting (\e newMref, passed its photometric checks) ended where the continued
-    motion predicted: then the camera kept moving and the pose is taken without ORB confirmation.
-  */
-  bool coastingConfirmed(const FramePtr &frame, const CoarseMotionHistory &coasting, const SE3d &newMref) const;
+  double lostSteps(int frameId) const;
   void adoptPreparedReference();
   bool keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result);
   void deliver(MappingJob job);
@@ -207,7 +202,7 @@ private:
     bool agreesWithPrevious = false; //!< the previous frame had a fix too, and the two agree (compareFixes)
   };
   StoredMapFix m_storedMapFix; //!< the last lost frame's fix (frameId -1: none)
-  //! Relocalised where the camera's motion continued (coastingConfirmed()): that motion per frame
+  //! Relocalised where the camera's motion continued (checkContinuedMotion()): that motion per frame
   //! (last_M_prelast), the velocity of the frame after it. Empty otherwise.
   std::optional<SE3d> m_keptMotion;
   IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)

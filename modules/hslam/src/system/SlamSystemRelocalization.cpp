@@ -7,29 +7,15 @@
 #include "system/SlamSystem.h"
 
 #include "system/LocalMapper.h"
+#include "tracking/MotionContinuation.h"
 #include "tracking/Relocalizer.h"
 
-#include <visp3/core/vpMath.h>
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <cmath>
 
 namespace hslam
 {
-namespace
-{
-//! The motion is continued over a loss only when at least this many frames are missing since the last tracked one.
-constexpr double kMinCoastingSteps = 2.;
-//! An alignment from the continued motion is taken without ORB confirmation when it stayed this close to the
-//! prediction: translation, as a share of one step's; rotation, degrees. Measured after covers of 3-10 frames on
-//! KITTI 06 (budgets 490 / 510, 13 relocalisations): 0.013-0.055 of a step and 0.12-1.05 degrees, where the
-//! window's corners gave 4-7 ORB inliers (15 needed). A hand-held camera does not keep its motion: on Tsukuba after
-//! 20 black frames the alignments from it that passed the photometric checks ended 0.6-11 steps and 1.2-11 degrees
-//! away, one of them at a wrong place (ATE 28 cm if taken).
-constexpr double kCoastingMaxStepShare = 0.25;
-constexpr double kCoastingMaxRotationDeg = 2.;
-} // namespace
-
 bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &history, bool &described)
 {
   ++m_relocAttempts;
@@ -125,41 +111,13 @@ bool SlamSystem::relocalizationConfirmed(const FramePtr &frame, bool aligned, co
   return aligned && ((m_indirect.usable && m_indirect.inliers >= needed) || confirmedByRelocalization >= needed);
 }
 
-CoarseMotionHistory SlamSystem::coastingHistory(const CoarseMotionHistory &history, int frameId) const
+double SlamSystem::lostSteps(int frameId) const
 {
-  // The motion of the last two tracked frames, continued over the frames lost since (ids count the frames given,
-  // black ones included): the last frame's pose moved on by n - 1 steps, the frame before it by n - 2, so that the
-  // constant-velocity hypothesis is n steps on and the others (skipped frame, half step, rotations) around it.
-  CoarseMotionHistory coasting;
   const int step = m_lastFrameId - m_prelastFrameId;
-  if (!history.valid || m_lastFrameId < 0 || m_prelastFrameId < 0 || step <= 0) {
-    return coasting;
+  if (m_lastFrameId < 0 || m_prelastFrameId < 0 || step <= 0) {
+    return 0.;
   }
-  const double n = static_cast<double>(frameId - m_lastFrameId) / step;
-  const SE3d::Tangent perStep = (history.lastMref * history.prelastMref.inverse()).log();
-  if (n < kMinCoastingSteps || !perStep.allFinite() || perStep.norm() == 0.) {
-    return coasting; // no lost frame between (the usual hypotheses cover it), or no motion to continue
-  }
-  coasting = history;
-  coasting.lastMref = SE3d::exp((n - 1.) * perStep) * history.lastMref;
-  coasting.prelastMref = SE3d::exp((n - 2.) * perStep) * history.lastMref;
-  return coasting;
-}
-
-bool SlamSystem::coastingConfirmed(const FramePtr &frame, const CoarseMotionHistory &coasting,
-                                   const SE3d &newMref) const
-{
-  const SE3d predicted = CoarseTracker::predictConstantVelocity(coasting);
-  const SE3d off = newMref * predicted.inverse();
-  const SE3d step = coasting.lastMref * coasting.prelastMref.inverse();
-  const double stepLength = step.translation().norm();
-  const double offShare = stepLength > 0. ? off.translation().norm() / stepLength : HUGE_VAL;
-  const double offDeg = vpMath::deg(off.log().tail<3>().norm());
-  const bool kept = offShare <= kCoastingMaxStepShare && offDeg <= kCoastingMaxRotationDeg;
-  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended " << offShare
-                                           << " of a step and " << offDeg << " deg from it"
-                                           << (kept ? ": the camera kept moving, accepted" : ""));
-  return kept;
+  return static_cast<double>(frameId - m_lastFrameId) / step;
 }
 
 void SlamSystem::recordStoredMapFix(const FramePtr &frame, const RelocalizationResult &r)
