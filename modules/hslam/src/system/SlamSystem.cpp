@@ -231,13 +231,15 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     if ((!success || !confirmed) && coasting.valid) {
       success = estimatePose(frame, coasting, newMref, affine, result);
       confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion kept)");
-      const ContinuedMotionCheck check = checkContinuedMotion(coasting, newMref);
-      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended "
-                                               << check.stepShare << " of a step and " << check.rotationDeg
-                                               << " deg from it" << (check.kept ? ": the camera kept moving" : ""));
-      if (!confirmed && success && check.kept) {
-        confirmed = true;
-        m_keptMotion = coasting.lastMref * coasting.prelastMref.inverse();
+      if (success && !confirmed) { // a failed alignment has not moved from the prediction: nothing to check
+        const ContinuedMotionCheck check = checkContinuedMotion(coasting, newMref);
+        VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended "
+                                                 << check.stepShare << " of a step and " << check.rotationDeg
+                                                 << " deg from it" << (check.kept ? ": the camera kept moving" : ""));
+        if (check.kept) {
+          confirmed = true;
+          m_keptMotion = coasting.lastMref * coasting.prelastMref.inverse();
+        }
       }
     }
     if (!success || !confirmed) {
