@@ -168,7 +168,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     return vpHSlam::stateLost;
   }
   // Motion history from the recorded poses (DSO: from the frame shells, under the pose lock).
-  CoarseMotionHistory history, coasting;
+  CoarseMotionHistory history, continued;
   SE3d wMref, wMlast, wMprelast;
   wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
   if (m_lastFrameId >= 0 && m_prelastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast) &&
@@ -182,9 +182,9 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     // motion the next two frames were placed 12 and 30 px on instead of about 60, and the run ended at 0.25 m).
     history.valid = true;
     history.lastMref = wMlast.inverse() * wMref;
-    history.prelastMref = m_keptMotion ? m_keptMotion->inverse() * history.lastMref : history.lastMref;
+    history.prelastMref = m_continuedMotion ? m_continuedMotion->inverse() * history.lastMref : history.lastMref;
   }
-  m_keptMotion.reset();
+  m_continuedMotion.reset();
   history.lastAffine = m_lastAffine;
 
   if (m_relocalizing) {
@@ -203,7 +203,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
       // joint alignment can find it; the same checks as any frame decide. Measured on 7-Scenes with frames
       // 120-125 black, fast preset: BoW candidates gave at most 15 matches, this found the camera at once.
       // A camera on a vehicle kept moving instead: tried second, below.
-      coasting = described ? continueMotion(history, lostSteps(frame->id)) : CoarseMotionHistory();
+      continued = described ? continueMotion(history, lostSteps(frame->id)) : CoarseMotionHistory();
       history.prelastMref = history.lastMref;
     }
   }
@@ -228,17 +228,17 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   }
   if (m_relocalizing && !seedFromStoredMap) {
     bool confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, "");
-    if ((!success || !confirmed) && coasting.valid) {
-      success = estimatePose(frame, coasting, newMref, affine, result);
-      confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion kept)");
+    if ((!success || !confirmed) && continued.valid) {
+      success = estimatePose(frame, continued, newMref, affine, result);
+      confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion continued)");
       if (success && !confirmed) { // a failed alignment has not moved from the prediction: nothing to check
-        const ContinuedMotionCheck check = checkContinuedMotion(coasting, newMref);
-        VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the kept motion ended "
+        const ContinuedMotionCheck check = checkContinuedMotion(continued, newMref);
+        VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the continued motion ended "
                                                  << check.stepShare << " of a step and " << check.rotationDeg
                                                  << " deg from it" << (check.kept ? ": the camera kept moving" : ""));
         if (check.kept) {
           confirmed = true;
-          m_keptMotion = coasting.lastMref * coasting.prelastMref.inverse();
+          m_continuedMotion = continued.lastMref * continued.prelastMref.inverse();
         }
       }
     }
@@ -276,7 +276,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     m_relocalizing = true;
     m_lostSince = frame->timestamp;
     m_storedMapFix = StoredMapFix();
-    m_keptMotion.reset();
+    m_continuedMotion.reset();
     m_consecutiveFailures = 0;
     return vpHSlam::stateLost;
   }
@@ -452,7 +452,7 @@ void SlamSystem::declareLost(bool discardSegment)
   m_initialized = false;
   m_relocalizing = false;
   m_storedMapFix = StoredMapFix();
-  m_keptMotion.reset();
+  m_continuedMotion.reset();
   m_initializer->reset();
   m_initFirstFrame.reset();
   m_pendingFrames.clear();
@@ -504,7 +504,7 @@ void SlamSystem::reset()
   m_restartRequested = false;
   m_relocalizing = false;
   m_storedMapFix = StoredMapFix();
-  m_keptMotion.reset();
+  m_continuedMotion.reset();
   m_relocAttempts = 0;
   m_relocSuccesses = 0;
   m_localizationReady = false; // the loaded map went with the rest

@@ -204,7 +204,7 @@ private:
   StoredMapFix m_storedMapFix; //!< the last lost frame's fix (frameId -1: none)
   //! Relocalised where the camera's motion continued (checkContinuedMotion()): that motion per frame
   //! (last_M_prelast), the velocity of the frame after it. Empty otherwise.
-  std::optional<SE3d> m_keptMotion;
+  std::optional<SE3d> m_continuedMotion;
   IndirectStepResult m_indirect; //!< the current frame's indirect step (its term is used by m_tracker)
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_trackerRefKeyframe = -1;       //!< keyframe id of m_tracker's reference
