@@ -49,14 +49,15 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #     closure solves with Eigen's sparse Cholesky, not CHOLMOD's OpenMP pool); the loop code runs in the other loop
 #     and map tests;
 #   SystemLoop.NoFalseLoopOnSequencesWithoutOne: detection and verification run in RealTimeLoopCorrection and loop.*;
-#   SystemReal.SevenScenes{CoveredLens,LongCover}*, SystemSynthetic.CoveredLensIsRelocalisedWithDirectTracking*,
+#   SystemReal.SevenScenes{CoveredLens,LongCover}*, SystemReal.TsukubaCoverIsNotRelocalisedOnARepeatedTexture,
+#     SystemSynthetic.CoveredLensIsRelocalisedWithDirectTracking*,
 #     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
 #     InTheSameMap and RecoversFromLostTracking (the real-time one runs under ThreadSanitizer below);
 #   SystemMapFile.LocalizationOnlyTracksEveryFrame*: loading and localisation-only run in the two other map tests;
 #   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
 #   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
 #     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking.
-long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.SevenScenes(CoveredLens|LongCover)|'
+long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.(SevenScenes(CoveredLens|LongCover)|TsukubaCover)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
 long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
 long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding'

@@ -222,3 +222,35 @@ TEST(SystemReal, KittiCoverIsBridgedByTheMotionTheCarKept)
                                     // was kept for the frame after the relocalisation
   }
 }
+
+TEST(SystemReal, TsukubaCoverIsNotRelocalisedOnARepeatedTexture)
+{
+  // Frames 50-69 black: the camera comes back 0.6 m and 20 degrees away. With budget 485 the window's triangulated
+  // points gave a PnP pose about 10 degrees off (a repeated texture), the alignment stayed on it and the run went on in
+  // one segment at 8 cm ATE (0.3 cm without the cover). Its alignment left 54 % of the reference's residuals below the
+  // cutoff, right ones 71-92 % (tracking.relocalizationMinInlierRatio): the pose is refused and the next frame is
+  // placed right. Budget 495 was placed right before and stays so.
+  HSLAM_REQUIRE_SHARED_DATA(folder, "tsukuba_cg_000-149");
+  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth.txt");
+  const unsigned int coverBegin = 50, coverEnd = 69;
+  for (int budget : {485, 495}) {
+    vpHSlamParameters params;
+    params.system.deterministic = true;
+    params.features.desiredImmatureDensity = budget;
+    const hslam_test::SystemRun plain = hslam_test::runSource(folder, 0, params);
+    const hslam_test::SystemRun covered = runCovered(folder, 0, params, coverBegin, coverEnd);
+    const int firstTrackedAfter = framesUntilTracked(covered.states, coverEnd);
+    const vpHSlam::Statistics &stats = covered.statistics;
+    const double ate = hslam_test::simAte(gt, covered.trajectory);
+    const double atePlain = hslam_test::simAte(gt, plain.trajectory);
+    std::cout << "Tsukuba, frames " << coverBegin << "-" << coverEnd << " black, budget " << budget << ": segments "
+              << stats.segments << ", relocalisations " << stats.relocalizationsSucceeded << "/"
+              << stats.relocalizationsAttempted << ", back after " << firstTrackedAfter << " frames, ATE " << ate
+              << " cm (without the cover " << atePlain << " cm)" << std::endl;
+    EXPECT_EQ(stats.segments, 1u) << "budget " << budget;
+    EXPECT_GE(stats.relocalizationsSucceeded, 1u);
+    ASSERT_GE(firstTrackedAfter, 0);
+    EXPECT_LE(firstTrackedAfter, 10);
+    EXPECT_LE(ate, 2. * atePlain) << "budget " << budget; // 0.38 / 0.37 cm measured; 7.97 cm for 485 before
+  }
+}

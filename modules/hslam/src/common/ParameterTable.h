@@ -156,6 +156,8 @@ inline const Field kFields[] = {
   HSLAM_PARAM(tracking, relocalizationCandidates, atLeast(1), "keyframes tried per lost frame"),
   HSLAM_PARAM(tracking, relocalizationMinInliers, atLeast(6), "PnP inliers needed to accept a relocalisation"),
   HSLAM_PARAM(tracking, relocalizationCheckInliers, atLeast(6), "ORB inliers confirming a relocalised pose"),
+  HSLAM_PARAM(tracking, relocalizationMinInlierRatio, between(0., 1.),
+              "window relocalisation: share of photometric residuals below the cutoff"),
   HSLAM_PARAM(tracking, relocalizeInWindow, anyValue(), "also relocalise on ORB points triangulated in the window"),
   HSLAM_PARAM(tracking, seedFromStoredMap, anyValue(), "an emptied window is seeded again from the stored map"),
 
