@@ -50,6 +50,7 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #     and map tests;
 #   SystemLoop.NoFalseLoopOnSequencesWithoutOne: detection and verification run in RealTimeLoopCorrection and loop.*;
 #   SystemReal.SevenScenes{CoveredLens,LongCover}*, SystemReal.TsukubaCoverIsNotRelocalisedOnARepeatedTexture,
+#     SystemReal.KittiCarFoundAgainKeepsItsMotionAndRenewsItsWindow (KittiCoverIsBridged* runs that path),
 #     SystemSynthetic.CoveredLensIsRelocalisedWithDirectTracking*,
 #     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
 #     InTheSameMap and RecoversFromLostTracking (the real-time one runs under ThreadSanitizer below);
@@ -57,7 +58,7 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
 #   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
 #     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking.
-long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.(SevenScenes(CoveredLens|LongCover)|TsukubaCover)|'
+long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.(SevenScenes(CoveredLens|LongCover)|TsukubaCover|KittiCarFound)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
 long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
 long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding'

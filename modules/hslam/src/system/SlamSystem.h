@@ -212,6 +212,7 @@ private:
   double m_trackerRefExposure = 1.;
   AffineBrightness m_lastAffine; //!< (a, b) of the last tracked frame
   int m_framesSinceKeyframeRequest = 0;
+  int m_forcedKeyframes = 0; //!< frames still made keyframes whatever their flow (after a relocalisation)
   int m_consecutiveFailures = 0;
   bool m_localizationReady = false; //!< localisation-only: a map is loaded and indexed
   int m_localizedKeyframe = -1;     //!< localisation-only: keyframe that placed the last located frame
