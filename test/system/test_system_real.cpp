@@ -57,6 +57,35 @@ int framesUntilTracked(const std::vector<vpHSlam::State> &states, unsigned int c
   }
   return -1;
 }
+
+//! A whole shared sequence run with and without frames coverBegin-coverEnd black, and what the cover tests check.
+struct CoverComparison {
+  hslam_test::SystemRun plain, covered;
+  double ate = 0., atePlain = 0.; //!< Sim(3) ATE of each run, ground-truth units
+  int firstTrackedAfter = -1;     //!< frames after the cover until the first tracked one (-1: never)
+};
+
+//! The defaults in deterministic mode with \e budget candidate points per keyframe.
+vpHSlamParameters deterministicWithBudget(int budget)
+{
+  vpHSlamParameters params;
+  params.system.deterministic = true;
+  params.features.desiredImmatureDensity = budget;
+  return params;
+}
+
+CoverComparison compareCover(const std::string &folder, const std::string &groundtruth, const vpHSlamParameters &params,
+                             unsigned int coverBegin, unsigned int coverEnd)
+{
+  CoverComparison c;
+  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/" + groundtruth);
+  c.plain = hslam_test::runSource(folder, 0, params);
+  c.covered = runCovered(folder, 0, params, coverBegin, coverEnd);
+  c.ate = hslam_test::simAte(gt, c.covered.trajectory);
+  c.atePlain = hslam_test::simAte(gt, c.plain.trajectory);
+  c.firstTrackedAfter = framesUntilTracked(c.covered.states, coverEnd);
+  return c;
+}
 } // namespace
 
 TEST(SystemReal, KittiWholeSequenceFastPreset)
@@ -193,33 +222,27 @@ TEST(SystemReal, KittiCoverIsBridgedByTheMotionTheCarKept)
   // continued over the lost frames ends within 0.06 of a step of it and is taken (see tracking/MotionContinuation.h),
   // and the next frame starts from that motion.
   HSLAM_REQUIRE_SHARED_DATA(folder, "kitti06_000-050");
-  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth_tum.txt");
   const unsigned int coverBegin = 25, coverEnd = 34;
   for (int budget : {490, 510}) {
-    vpHSlamParameters params;
-    params.system.deterministic = true;
-    params.features.desiredImmatureDensity = budget;
-    const hslam_test::SystemRun plain = hslam_test::runSource(folder, 0, params);
-    const hslam_test::SystemRun covered = runCovered(folder, 0, params, coverBegin, coverEnd);
-    const int firstTrackedAfter = framesUntilTracked(covered.states, coverEnd);
+    const CoverComparison c =
+        compareCover(folder, "groundtruth_tum.txt", deterministicWithBudget(budget), coverBegin, coverEnd);
+    const hslam_test::SystemRun &covered = c.covered;
     size_t trackedAfter = 0;
     for (size_t i = coverEnd + 1; i < covered.states.size(); ++i) {
       trackedAfter += covered.states[i] == vpHSlam::stateTracking ? 1 : 0;
     }
     const vpHSlam::Statistics &stats = covered.statistics;
-    const double ate = hslam_test::simAte(gt, covered.trajectory);
-    const double atePlain = hslam_test::simAte(gt, plain.trajectory);
     std::cout << "KITTI 06 0-50, frames " << coverBegin << "-" << coverEnd << " black, budget " << budget
               << ": segments " << stats.segments << ", relocalisations " << stats.relocalizationsSucceeded << "/"
-              << stats.relocalizationsAttempted << ", back after " << firstTrackedAfter << " frames, " << trackedAfter
-              << " of " << covered.states.size() - coverEnd - 1 << " tracked after, ATE " << ate
-              << " m (without the cover " << atePlain << " m)" << std::endl;
+              << stats.relocalizationsAttempted << ", back after " << c.firstTrackedAfter << " frames, " << trackedAfter
+              << " of " << covered.states.size() - coverEnd - 1 << " tracked after, ATE " << c.ate
+              << " m (without the cover " << c.atePlain << " m)" << std::endl;
     EXPECT_EQ(stats.segments, 1u) << "budget " << budget;
     EXPECT_GE(stats.relocalizationsSucceeded, 1u);
-    EXPECT_EQ(firstTrackedAfter, 0) << "the first frame after the cover is placed";
+    EXPECT_EQ(c.firstTrackedAfter, 0) << "the first frame after the cover is placed";
     EXPECT_EQ(trackedAfter, covered.states.size() - coverEnd - 1);
-    EXPECT_LE(ate, 1.5 * atePlain); // 0.020 / 0.021 m measured; 0.25 m for one of 21 covers before the motion
-                                    // was kept for the frame after the relocalisation
+    EXPECT_LE(c.ate, 1.5 * c.atePlain); // 0.020 / 0.021 m measured; 0.25 m for one of 21 covers before the motion
+                                        // was kept for the frame after the relocalisation
   }
 }
 
@@ -231,27 +254,20 @@ TEST(SystemReal, TsukubaCoverIsNotRelocalisedOnARepeatedTexture)
   // cutoff, right ones 71-92 % (tracking.relocalizationMinInlierRatio): the pose is refused and the next frame is
   // placed right. Budget 495 was placed right before and stays so.
   HSLAM_REQUIRE_SHARED_DATA(folder, "tsukuba_cg_000-149");
-  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth.txt");
   const unsigned int coverBegin = 50, coverEnd = 69;
   for (int budget : {485, 495}) {
-    vpHSlamParameters params;
-    params.system.deterministic = true;
-    params.features.desiredImmatureDensity = budget;
-    const hslam_test::SystemRun plain = hslam_test::runSource(folder, 0, params);
-    const hslam_test::SystemRun covered = runCovered(folder, 0, params, coverBegin, coverEnd);
-    const int firstTrackedAfter = framesUntilTracked(covered.states, coverEnd);
-    const vpHSlam::Statistics &stats = covered.statistics;
-    const double ate = hslam_test::simAte(gt, covered.trajectory);
-    const double atePlain = hslam_test::simAte(gt, plain.trajectory);
+    const CoverComparison c =
+        compareCover(folder, "groundtruth.txt", deterministicWithBudget(budget), coverBegin, coverEnd);
+    const vpHSlam::Statistics &stats = c.covered.statistics;
     std::cout << "Tsukuba, frames " << coverBegin << "-" << coverEnd << " black, budget " << budget << ": segments "
               << stats.segments << ", relocalisations " << stats.relocalizationsSucceeded << "/"
-              << stats.relocalizationsAttempted << ", back after " << firstTrackedAfter << " frames, ATE " << ate
-              << " cm (without the cover " << atePlain << " cm)" << std::endl;
+              << stats.relocalizationsAttempted << ", back after " << c.firstTrackedAfter << " frames, ATE " << c.ate
+              << " cm (without the cover " << c.atePlain << " cm)" << std::endl;
     EXPECT_EQ(stats.segments, 1u) << "budget " << budget;
     EXPECT_GE(stats.relocalizationsSucceeded, 1u);
-    ASSERT_GE(firstTrackedAfter, 0);
-    EXPECT_LE(firstTrackedAfter, 10);
-    EXPECT_LE(ate, 2. * atePlain) << "budget " << budget; // 0.38 / 0.37 cm measured; 7.97 cm for 485 before
+    ASSERT_GE(c.firstTrackedAfter, 0);
+    EXPECT_LE(c.firstTrackedAfter, 10);
+    EXPECT_LE(c.ate, 2. * c.atePlain) << "budget " << budget; // 0.38 / 0.37 cm measured; 7.97 cm for 485 before
   }
 }
 
@@ -264,7 +280,6 @@ TEST(SystemReal, KittiCarFoundAgainKeepsItsMotionAndRenewsItsWindow)
   // - found by the window's points (frames 35-39 black, hybrid tracking, budget 505): the frame after started from no
   //   motion and was placed 0.4 m on; 0.117 m ATE. The motion is now kept when the pose found is where it continued.
   HSLAM_REQUIRE_SHARED_DATA(folder, "kitti06_000-050");
-  const vpHSlamTrajectory gt = vpHSlamTrajectory::readTum(folder + "/groundtruth_tum.txt");
   struct Case {
     unsigned int coverBegin, coverEnd;
     int budget;
@@ -273,21 +288,16 @@ TEST(SystemReal, KittiCarFoundAgainKeepsItsMotionAndRenewsItsWindow)
   for (const Case &c :
        {Case{30, 39, 475, vpHSlamParameters::trackingDirect}, Case{30, 39, 525, vpHSlamParameters::trackingDirect},
         Case{35, 39, 505, vpHSlamParameters::trackingHybrid}}) {
-    vpHSlamParameters params;
-    params.system.deterministic = true;
-    params.features.desiredImmatureDensity = c.budget;
+    vpHSlamParameters params = deterministicWithBudget(c.budget);
     params.tracking.mode = c.mode;
-    const hslam_test::SystemRun plain = hslam_test::runSource(folder, 0, params);
-    const hslam_test::SystemRun covered = runCovered(folder, 0, params, c.coverBegin, c.coverEnd);
-    const double ate = hslam_test::simAte(gt, covered.trajectory);
-    const double atePlain = hslam_test::simAte(gt, plain.trajectory);
+    const CoverComparison r = compareCover(folder, "groundtruth_tum.txt", params, c.coverBegin, c.coverEnd);
     std::cout << "KITTI 06 0-50, frames " << c.coverBegin << "-" << c.coverEnd << " black, budget " << c.budget
               << (c.mode == vpHSlamParameters::trackingHybrid ? ", hybrid" : ", direct") << ": segments "
-              << covered.statistics.segments << ", relocalisations " << covered.statistics.relocalizationsSucceeded
-              << ", back after " << framesUntilTracked(covered.states, c.coverEnd) << " frames, ATE " << ate
-              << " m (without the cover " << atePlain << " m)" << std::endl;
-    EXPECT_EQ(covered.statistics.segments, 1u);
-    EXPECT_EQ(framesUntilTracked(covered.states, c.coverEnd), 0) << "the first frame after the cover is placed";
-    EXPECT_LE(ate, 2. * atePlain) << "budget " << c.budget; // before: 5.4x, 31x and 4.5x
+              << r.covered.statistics.segments << ", relocalisations " << r.covered.statistics.relocalizationsSucceeded
+              << ", back after " << r.firstTrackedAfter << " frames, ATE " << r.ate << " m (without the cover "
+              << r.atePlain << " m)" << std::endl;
+    EXPECT_EQ(r.covered.statistics.segments, 1u);
+    EXPECT_EQ(r.firstTrackedAfter, 0) << "the first frame after the cover is placed";
+    EXPECT_LE(r.ate, 2. * r.atePlain) << "budget " << c.budget; // before: 5.4x, 31x and 4.5x
   }
 }
