@@ -12,7 +12,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <random>
 
 using namespace hslam;
@@ -108,25 +110,70 @@ TEST(HybridTrackingMath, geometricJacobianMatchesNumericDifferences)
   K.cy = 240.;
   const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.1, -0.05, 0.2, 0.03, -0.02, 0.05).finished());
   // Noise of 3 pixels puts some residuals past the Huber threshold: both branches are checked.
-  const GeometricTerm term = syntheticTerm(truth, K, 60, 3., 7);
+  GeometricTerm term = syntheticTerm(truth, K, 60, 3., 7);
   const SE3d at =
       SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.01, 0.01, -0.01, 0.002, 0.001, -0.003).finished()) * truth;
-  Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
-  Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
-  CoarseTracker::geometricEnergy(term, K, at, &H, &b);
-  const double eps = 1e-6;
-  for (int i = 0; i < 6; ++i) {
-    Eigen::Matrix<double, 6, 1> d = Eigen::Matrix<double, 6, 1>::Zero();
-    d[i] = eps;
-    const double ep = CoarseTracker::geometricEnergy(term, K, SE3d::exp(d) * at);
-    const double em = CoarseTracker::geometricEnergy(term, K, SE3d::exp(-d) * at);
-    const double numeric = (ep - em) / (2. * eps);
-    // Energy = sum of rho(r^2): its gradient is 2 J^T W r = 2 b.
-    EXPECT_NEAR(2. * b[i], numeric, 1e-4 * std::max(1., std::fabs(numeric))) << "twist component " << i;
+  for (bool weighted : {false, true}) {
+    if (weighted) { // paper eq. 3 weights in (0, 1]
+      for (size_t i = 0; i < term.Xref.size(); ++i) {
+        term.weights.push_back(0.1 + 0.9 * static_cast<double>(i % 7) / 6.);
+      }
+    }
+    Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
+    CoarseTracker::geometricEnergy(term, K, at, &H, &b);
+    const double eps = 1e-6;
+    for (int i = 0; i < 6; ++i) {
+      Eigen::Matrix<double, 6, 1> d = Eigen::Matrix<double, 6, 1>::Zero();
+      d[i] = eps;
+      const double ep = CoarseTracker::geometricEnergy(term, K, SE3d::exp(d) * at);
+      const double em = CoarseTracker::geometricEnergy(term, K, SE3d::exp(-d) * at);
+      const double numeric = (ep - em) / (2. * eps);
+      // Energy = sum of rho(r^2): its gradient is 2 J^T W r = 2 b.
+      EXPECT_NEAR(2. * b[i], numeric, 1e-4 * std::max(1., std::fabs(numeric)))
+          << "twist component " << i << (weighted ? ", weighted" : "");
+    }
+    EXPECT_TRUE(H.bottomRows<2>().isZero()) << "the geometric term must not touch the affine parameters";
+    const double det = H.topLeftCorner<6, 6>().determinant();
+    EXPECT_GT(det, 0.);
   }
-  EXPECT_TRUE(H.bottomRows<2>().isZero()) << "the geometric term must not touch the affine parameters";
-  const double det = H.topLeftCorner<6, 6>().determinant();
-  EXPECT_GT(det, 0.);
+}
+
+TEST(HybridTrackingMath, depthWeightsDampenPointsOfUncertainDepth)
+{
+  // Paper eq. 3: 80 exact matches and 20 whose points are 1.5 px off (inside the Huber threshold, so they bias an
+  // unweighted solution); weighted as points of 1000x the depth variance, they hardly move the pose.
+  PinholeIntrinsics K;
+  K.fx = K.fy = 500.;
+  K.cx = 320.;
+  K.cy = 240.;
+  const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, 0.1, -0.1, 0.05, 0.02, -0.03).finished());
+  GeometricTerm term = syntheticTerm(truth, K, 100, 0., 13);
+  for (size_t i = 80; i < 100; ++i) {
+    term.uv[i] += Eigen::Vector2d(1.5, 0.);
+  }
+  auto solve = [&](const GeometricTerm &t) {
+    SE3d pose = truth;
+    for (int it = 0; it < 10; ++it) {
+      Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+      Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
+      CoarseTracker::geometricEnergy(t, K, pose, &H, &b);
+      pose = SE3d::exp(H.topLeftCorner<6, 6>().ldlt().solve(-b.head<6>())) * pose;
+    }
+    return (pose * truth.inverse()).log().norm();
+  };
+  const double unweighted = solve(term);
+  term.weights.assign(100, 1.);
+  std::fill(term.weights.begin() + 80, term.weights.end(), 1e-3);
+  const double weighted = solve(term);
+  EXPECT_GT(unweighted, 1e-3);
+  EXPECT_LT(weighted, 0.01 * unweighted);
+  // A weight scales its residual's energy.
+  GeometricTerm one = syntheticTerm(truth, K, 1, 0., 17);
+  one.uv[0] += Eigen::Vector2d(1., 1.);
+  const double plain = CoarseTracker::geometricEnergy(one, K, truth);
+  one.weights = {0.25};
+  EXPECT_NEAR(CoarseTracker::geometricEnergy(one, K, truth), 0.25 * plain, 1e-12);
 }
 
 TEST_F(HybridTrackingTest, cornersAreSpreadAndKeepTheirDistance)
@@ -301,6 +348,49 @@ TEST_F(HybridTrackingTest, indirectStepMatchesAndRecoversThePose)
     EXPECT_GT(out.term.sigma2Px, 0.);
     EXPECT_LT(out.term.sigma2Px, 2.);
   }
+}
+
+TEST_F(HybridTrackingTest, indirectStepWeighsMatchesByDepthInformation)
+{
+  REQUIRE_TEXTURES();
+  const unsigned int target = 10;
+  Frame frame;
+  hslam_test::makeFrame(scene, target, params.tracker, frame);
+  const SE3d truth = hslam_test::groundTruthNewMref(scene, 0, target);
+  std::vector<ReferenceFeature> described = features;
+  for (size_t i = 0; i < described.size(); ++i) {
+    described[i].idepthVar = 1e-4 * static_cast<double>(1 + i % 4); // information 1, 1/2, 1/3, 1/4 of the best
+  }
+  vpHSlamParameters weighting = params;
+  weighting.tracking.geometricDepthWeights = true;
+  for (bool on : {false, true}) {
+    HybridTracker hybrid(on ? weighting : params, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
+    hybrid.extract(frame.raw);
+    IndirectStepResult out;
+    ASSERT_TRUE(hybrid.indirectStep(described, truth, out));
+    if (!on) {
+      EXPECT_TRUE(out.term.weights.empty());
+      EXPECT_EQ(out.term.count, 0.);
+      continue;
+    }
+    ASSERT_EQ(out.term.weights.size(), out.term.Xref.size());
+    const auto range = std::minmax_element(out.term.weights.begin(), out.term.weights.end());
+    EXPECT_DOUBLE_EQ(*range.second, 1.);
+    EXPECT_NEAR(*range.first, 0.25, 1e-9);
+    EXPECT_NEAR(out.term.count, std::accumulate(out.term.weights.begin(), out.term.weights.end(), 0.), 1e-9);
+    EXPECT_LT(out.term.count, static_cast<double>(out.term.Xref.size()));
+    EXPECT_GT(out.term.sigma2Px, 0.);
+  }
+  // An inlier without a variance (0: unknown, every second feature here) leaves every weight at 1.
+  for (size_t i = 0; i < described.size(); i += 2) {
+    described[i].idepthVar = 0.;
+  }
+  HybridTracker hybrid(weighting, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
+  hybrid.extract(frame.raw);
+  IndirectStepResult out;
+  ASSERT_TRUE(hybrid.indirectStep(described, truth, out));
+  EXPECT_TRUE(out.term.weights.empty());
+  EXPECT_EQ(out.term.count, 0.);
 }
 
 TEST_F(HybridTrackingTest, jointOptimisationRecoversAPerturbedPose)

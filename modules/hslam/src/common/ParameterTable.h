@@ -151,6 +151,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(tracking, matchRatio, openInterval(0., 1.), "best match below this * second best"),
   HSLAM_PARAM(tracking, minMatchesBeforeWidening, atLeast(0), "fewer matches: search again, twice the radius"),
   HSLAM_PARAM(tracking, minGeometricInliers, atLeast(4), "inliers the indirect step needs to give a pose"),
+  HSLAM_PARAM(tracking, geometricDepthWeights, anyValue(), "joint step: matches weighted by depth information (eq. 3)"),
   HSLAM_PARAM(tracking, relocalize, anyValue(), "relocalise in the same map before starting a new segment"),
   HSLAM_PARAM(tracking, relocalizationTimeout, atLeast(0.), "seconds seeing features unplaced before a new segment"),
   HSLAM_PARAM(tracking, relocalizationCandidates, atLeast(1), "keyframes tried per lost frame"),

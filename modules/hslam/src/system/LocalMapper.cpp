@@ -449,6 +449,7 @@ void LocalMapper::buildReferencePoints()
         f.Xref = refMhost * (ray / p.idepth);
         f.orb = p.orb;
         f.angleDeg = p.orbAngleDeg;
+        f.idepthVar = p.idepthVar;
         m.referenceFeatures.push_back(f);
       }
     }

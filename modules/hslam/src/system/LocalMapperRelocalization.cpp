@@ -125,6 +125,7 @@ void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &featur
       f.Xref = wMc * m.K0.unproject(p.u, p.v, p.idepth);
       f.orb = p.orb;
       f.angleDeg = p.orbAngleDeg;
+      f.idepthVar = p.idepthVar;
       features.push_back(f);
     }
   }

@@ -337,7 +337,8 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
       const double K = geometricWeight(levels - 1 - lvl, m_geometric->inliers);
       wp = 1. / sp2;
       wg = (m_geometric->poseFromGeometryOnly ? 1. : K) /
-           (static_cast<double>(m_geometric->Xref.size()) * std::max(m_geometric->sigma2Px, kMinGeometricVariance));
+           ((m_geometric->count > 0. ? m_geometric->count : static_cast<double>(m_geometric->Xref.size())) *
+            std::max(m_geometric->sigma2Px, kMinGeometricVariance));
       if (lvl == 0) {
         result.geometricWeight = K;
       }

@@ -76,6 +76,7 @@ struct ReferenceFeature {
   Eigen::Vector3d Xref = Eigen::Vector3d::Zero(); //!< position in the reference camera frame
   OrbDescriptor orb;                              //!< descriptor computed in the host keyframe
   float angleDeg = 0.f;                           //!< its orientation, degrees
+  double idepthVar = 0.;                          //!< variance of its inverse depth in the host (0: unknown)
 };
 
 /*!
@@ -93,6 +94,14 @@ struct GeometricTerm {
   std::vector<Eigen::Vector2d> uv;   //!< their level-0 pixels in the new frame
   double sigma2Px = 1.;              //!< s_g^2, pixels^2 (> 0)
   int inliers = 0;                   //!< N_g of eq. 4 (the indirect step's inliers)
+  /*!
+    Paper eq. 3 (tracking.geometricDepthWeights): each match's weight (1 / var_i) / max_j (1 / var_j) over the
+    inverse-depth variances of the matched points, so that points of uncertain depth pull the pose less; empty: every
+    weight 1. With weights, E_g sums the weighted residuals, \e count is their sum and \e sigma2Px their weighted mean
+    squared error (the term keeps the balance eq. 1 gives it, whatever the spread of the weights).
+  */
+  std::vector<double> weights;
+  double count = 0.; //!< n_g of eq. 1 with weights: their sum (0: the number of matches)
   /*!
     Indirect ablation: the pose comes from the geometric term alone (the photometric term only estimates (a, b)),
     and the photometric acceptance checks (outlier share, bound of the previous frame) are not applied.

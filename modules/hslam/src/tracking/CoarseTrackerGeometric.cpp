@@ -27,22 +27,24 @@ double CoarseTracker::geometricEnergy(const GeometricTerm &term, const PinholeIn
   Eigen::Vector2d r;
   Eigen::Matrix<double, 2, 6> J;
   const size_t n = std::min(term.Xref.size(), term.uv.size());
+  const bool weighted = term.weights.size() == n;
   for (size_t i = 0; i < n; ++i) {
+    const double w = weighted ? term.weights[i] : 1.;
     ReprojectionObservation obs;
     obs.wX = term.Xref[i];
     obs.uv = term.uv[i];
     if (!reprojectionResidual(newMref, obs, K0, kMinDepth, r, H ? &J : nullptr)) {
-      energy += kGeometricHuber2; // behind the camera: a saturated residual, no gradient
+      energy += w * kGeometricHuber2; // behind the camera: a saturated residual, no gradient
       continue;
     }
     const double e2 = r.squaredNorm();
-    double weight = 1.;
+    double weight = w;
     if (e2 <= kGeometricHuber2) {
-      energy += e2;
+      energy += w * e2;
     } else {
       const double e = std::sqrt(e2);
-      energy += 2. * delta * e - kGeometricHuber2;
-      weight = delta / e;
+      energy += w * (2. * delta * e - kGeometricHuber2);
+      weight = w * delta / e;
     }
     if (H) {
       H->topLeftCorner<6, 6>().noalias() += weight * J.transpose() * J;

@@ -7,6 +7,7 @@
 #include "tracking/PoseOnlyOptimizer.h"
 #include "tracking/Relocalizer.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hslam
@@ -110,6 +111,49 @@ bool HybridTracker::recoverFromLargeMotion(const std::vector<ReferenceFeature> &
   return true;
 }
 
+void HybridTracker::weighByDepthVariance(const std::vector<ReprojectionObservation> &observations,
+                                         const std::vector<double> &idepthVars, const PoseOnlyResult &pose,
+                                         GeometricTerm &term) const
+{
+  // Paper eq. 3: w_i = (1 / var_i) / max_j (1 / var_j) over the inliers. A point of unknown variance (a stored
+  // point without one) leaves every weight at 1: one scale for all or none.
+  std::vector<double> information;
+  for (size_t i = 0; i < observations.size(); ++i) {
+    if (!pose.inlier[i]) {
+      continue;
+    }
+    if (!(idepthVars[i] > 0.) || !std::isfinite(idepthVars[i])) {
+      return;
+    }
+    information.push_back(1. / idepthVars[i]);
+  }
+  if (information.empty()) {
+    return;
+  }
+  const double maxInformation = *std::max_element(information.begin(), information.end());
+  term.weights.clear();
+  double sumWeights = 0., sumWeightedError2 = 0.;
+  size_t j = 0;
+  for (size_t i = 0; i < observations.size(); ++i) {
+    if (!pose.inlier[i]) {
+      continue;
+    }
+    const double w = information[j++] / maxInformation;
+    term.weights.push_back(w);
+    Eigen::Vector2d r;
+    if (reprojectionResidual(pose.cTw, observations[i], m_K0, kMinDepth, r)) {
+      sumWeights += w;
+      sumWeightedError2 += w * r.squaredNorm();
+    }
+  }
+  // n_g s_g^2 of eq. 1 from the weighted residuals: the term keeps its balance against the photometric one (with the
+  // plain count and variance it shrank by the mean weight).
+  if (sumWeights > 0.) {
+    term.count = sumWeights;
+    term.sigma2Px = sumWeightedError2 / sumWeights;
+  }
+}
+
 bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref,
                                  IndirectStepResult &out)
 {
@@ -146,10 +190,14 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
     return false;
   }
   std::vector<ReprojectionObservation> observations(matches.size());
+  std::vector<double> idepthVars(matches.size());
   for (size_t i = 0; i < matches.size(); ++i) {
     const FrameKeypoint &k = m_keypoints[static_cast<size_t>(matches[i].keypoint)];
-    observations[i].wX = features[static_cast<size_t>(m_projectedFeature[static_cast<size_t>(matches[i].point)])].Xref;
+    const ReferenceFeature &f =
+        features[static_cast<size_t>(m_projectedFeature[static_cast<size_t>(matches[i].point)])];
+    observations[i].wX = f.Xref;
     observations[i].uv = Eigen::Vector2d(k.u, k.v);
+    idepthVars[i] = f.idepthVar;
   }
   const PoseOnlyResult pose = optimizePoseOnly(start, observations, m_K0);
   out.inliers = pose.inliers;
@@ -167,6 +215,9 @@ bool HybridTracker::indirectStep(const std::vector<ReferenceFeature> &features, 
   }
   out.term.inliers = pose.inliers;
   out.term.sigma2Px = pose.inlierRmsePx * pose.inlierRmsePx;
+  if (m_params.geometricDepthWeights) {
+    weighByDepthVariance(observations, idepthVars, pose, out.term);
+  }
   out.usable = true;
   return true;
 }

@@ -26,6 +26,7 @@
 #include "features/OrbMatcher.h"
 #include "features/PointDescriptors.h"
 #include "tracking/CoarseTracker.h"
+#include "tracking/PoseOnlyOptimizer.h"
 #include "tracking/Relocalizer.h"
 
 #include <visp3/core/vpConfig.h>
@@ -63,6 +64,10 @@ public:
   bool indirectStep(const std::vector<ReferenceFeature> &features, const SE3d &predictedMref, IndirectStepResult &out);
 
 private:
+  //! Paper eq. 3 weights of the inliers of \e pose (see GeometricTerm::weights), with the count and variance they give.
+  void weighByDepthVariance(const std::vector<ReprojectionObservation> &observations,
+                            const std::vector<double> &idepthVars, const PoseOnlyResult &pose,
+                            GeometricTerm &term) const;
   //! Fill m_projected / m_projectedFeature with the features landing in the image at \e newMref.
   void project(const std::vector<ReferenceFeature> &features, const SE3d &newMref);
   /*!

@@ -152,6 +152,9 @@ public:
     double matchRatio = 0.9;            //!< best distance must be below this times the second best (ORB-SLAM2)
     int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
     int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
+    //! Paper eq. 3: weigh each match of the joint optimisation by its point's inverse-depth information over the
+    //! largest (hybrid tracking). Off: measured no better than equal weights (README, "Hybrid tracking")
+    bool geometricDepthWeights = false;
     bool relocalize = true; //!< when tracking fails, relocalise in the same map before a new segment (hybrid or
                             //!< indirect tracking, or any tracking in vo-reuse and slam: it needs the keyframe
                             //!< database)
