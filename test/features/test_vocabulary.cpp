@@ -141,6 +141,56 @@ TEST(Vocabulary, DirectIndexGroupsFeaturesByNode)
   EXPECT_EQ(direct[1].nodeId, 5u);
 }
 
+TEST(Vocabulary, BatchDescentGivesTheWordsOfOneAtATime)
+{
+  // transform() descends all descriptors together through the popcnt path where the processor has the instruction
+  // (features/BinaryDescriptor.h); wordOf() takes one descriptor at a time through the portable count. On the
+  // shipped vocabulary, with random descriptors and descriptors one bit from a centroid (ties between children are
+  // likely there), both must give the same words and the same direct-index nodes.
+  const std::string path = std::string(HSLAM_SOURCE_DIR) + "/data/hslam-orb.hvoc";
+  std::ifstream probe(path);
+  if (!probe) {
+    GTEST_SKIP() << "no default vocabulary (data/hslam-orb.hvoc)";
+  }
+  const OrbVocabulary v = hslam::loadVocabulary(path);
+  std::mt19937_64 rng(42);
+  std::vector<OrbDescriptor> descriptors;
+  for (int i = 0; i < 1500; ++i) {
+    OrbDescriptor d;
+    for (std::uint64_t &w : d.words) {
+      w = rng();
+    }
+    if (i % 2 == 1) { // one bit away from the centroid of one of the first nodes (depths 1 and 2)
+      d = v.descriptor(1u + static_cast<std::uint32_t>(i % 100));
+      d.words[static_cast<std::size_t>(i % 4)] ^= std::uint64_t(1) << (i % 64);
+    }
+    descriptors.push_back(d);
+  }
+  constexpr int kLevelsUp = 2;
+  BowVector bow;
+  hslam::FeatureVector direct;
+  v.transform(descriptors, bow, direct, kLevelsUp);
+  std::vector<std::uint32_t> nodeOf(descriptors.size(), OrbVocabulary::kNoWord);
+  for (const auto &entry : direct) {
+    for (std::uint32_t f : entry.features) {
+      nodeOf[f] = entry.nodeId;
+    }
+  }
+  BowVector one;
+  for (std::size_t i = 0; i < descriptors.size(); ++i) {
+    std::uint32_t node = 0;
+    const std::uint32_t word = v.wordOf(descriptors[i], v.levels() - kLevelsUp, &node);
+    v.transform({descriptors[i]}, one);
+    if (one.empty()) {
+      continue; // a word of weight 0 is left out of both
+    }
+    ASSERT_EQ(one.size(), 1u);
+    EXPECT_EQ(one[0].wordId, word) << "descriptor " << i;
+    EXPECT_EQ(nodeOf[i], node) << "descriptor " << i;
+  }
+  EXPECT_GT(bow.size(), 500u); // many words reached (825 here)
+}
+
 TEST(Vocabulary, AssignRejectsWhatIsNotATree)
 {
   OrbVocabulary v;
