@@ -111,9 +111,13 @@ hammingDistanceBuiltin(const OrbDescriptor &a, const OrbDescriptor &b)
 inline OrbDescriptor descriptorFromBytes(const std::uint8_t *bytes)
 {
   OrbDescriptor d;
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__
+  std::memcpy(d.words.data(), bytes, kOrbDescriptorBytes); // byte j of the words is byte j of the row (see above)
+#else
   for (int j = 0; j < kOrbDescriptorBytes; ++j) {
     d.setByte(j, bytes[j]);
   }
+#endif
   return d;
 }
 
