@@ -20,7 +20,9 @@
 #   spread    how much one deterministic run says: per sequence and mode, runs with PERTURB_KEY set to each of
 #             PERTURB_VALUES (default: features.desiredImmatureDensity = 490 495 500 505 510, the fast preset's
 #             500 moved by up to 2 %), their ATEs and the median. A 2 % change of the point budget moves the ATE of
-#             one run by 10-25 % on these short sequences, so compare modes by these medians, not by single runs.
+#             one run by 10-25 % on these short sequences, so compare modes by these medians, not by single runs;
+#             each mode after the first is compared with it (compare_medians in benchmark-common.sh: ratio of the
+#             medians and its 90 % bootstrap interval).
 # A run that fails prints a line naming its log and the benchmark carries on (the exit status is then 1). Per-run
 # files go to $OUT.
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-hybrid-bench), SEQUENCES
@@ -92,11 +94,21 @@ if has_section ablation; then
 fi
 
 if has_section spread; then
-  echo "== spread: $perturb_key = $perturb_values; ATE of each run, then the median"
+  echo "== spread: $perturb_key = $perturb_values; ATE of each run, then the median; against the first mode: ratio"
+  echo "   of the medians, its 90 % bootstrap interval (1 inside: not told apart) and the runs where it was better"
   for seq in "${available[@]}"; do
+    first_ates=""
     for mode in $modes; do
       budget_median "$out/$seq.$mode" "$seq" "$perturb_values" --tracking-mode "$mode"
       printf "%-28s %-8s median %8s   runs %s\n" "$seq" "$mode" "$budget_med" "${budget_ates[*]}"
+      if [[ -z "$first_ates" ]]; then
+        first_ates="${budget_ates[*]}"
+        first_mode="$mode"
+      else
+        read -r ratio lo hi wins pairs <<< "$(compare_medians "$first_ates" "${budget_ates[*]}")"
+        printf "%-28s %-8s / %-8s %s, 90 %% interval [%s, %s], better in %s of %s runs\n" "" "$mode" "$first_mode" \
+          "$ratio" "$lo" "$hi" "$wins" "$pairs"
+      fi
     done
   done
   echo
