@@ -90,6 +90,34 @@ GeometricTerm syntheticTerm(const SE3d &truth, const PinholeIntrinsics &K, int n
   term.sigma2Px = std::max(noise * noise, 0.25);
   return term;
 }
+
+//! A 500 px pinhole camera centred on a 640x480 image.
+PinholeIntrinsics squarePixelCamera()
+{
+  PinholeIntrinsics K;
+  K.fx = K.fy = 500.;
+  K.cx = 320.;
+  K.cy = 240.;
+  return K;
+}
+
+//! The pose the geometry-only tests recover.
+SE3d geometryTestPose()
+{
+  return SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, 0.1, -0.1, 0.05, 0.02, -0.03).finished());
+}
+
+//! Gauss-Newton on the geometric energy alone (no photometric term, no damping), 10 steps from \e pose.
+SE3d minimiseGeometricEnergy(const GeometricTerm &term, const PinholeIntrinsics &K, SE3d pose)
+{
+  for (int it = 0; it < 10; ++it) {
+    Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
+    Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
+    CoarseTracker::geometricEnergy(term, K, pose, &H, &b);
+    pose = SE3d::exp(H.topLeftCorner<6, 6>().ldlt().solve(-b.head<6>())) * pose;
+  }
+  return pose;
+}
 } // namespace
 
 TEST(HybridTrackingMath, geometricWeightFollowsEquation4)
@@ -143,24 +171,14 @@ TEST(HybridTrackingMath, depthWeightsDampenPointsOfUncertainDepth)
 {
   // Paper eq. 3: 80 exact matches and 20 whose points are 1.5 px off (inside the Huber threshold, so they bias an
   // unweighted solution); weighted as points of 1000x the depth variance, they hardly move the pose.
-  PinholeIntrinsics K;
-  K.fx = K.fy = 500.;
-  K.cx = 320.;
-  K.cy = 240.;
-  const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, 0.1, -0.1, 0.05, 0.02, -0.03).finished());
+  const PinholeIntrinsics K = squarePixelCamera();
+  const SE3d truth = geometryTestPose();
   GeometricTerm term = syntheticTerm(truth, K, 100, 0., 13);
   for (size_t i = 80; i < 100; ++i) {
     term.uv[i] += Eigen::Vector2d(1.5, 0.);
   }
   auto solve = [&](const GeometricTerm &t) {
-    SE3d pose = truth;
-    for (int it = 0; it < 10; ++it) {
-      Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
-      Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
-      CoarseTracker::geometricEnergy(t, K, pose, &H, &b);
-      pose = SE3d::exp(H.topLeftCorner<6, 6>().ldlt().solve(-b.head<6>())) * pose;
-    }
-    return (pose * truth.inverse()).log().norm();
+    return (minimiseGeometricEnergy(t, K, truth) * truth.inverse()).log().norm();
   };
   const double unweighted = solve(term);
   term.weights.assign(100, 1.);
@@ -353,44 +371,44 @@ TEST_F(HybridTrackingTest, indirectStepMatchesAndRecoversThePose)
 TEST_F(HybridTrackingTest, indirectStepWeighsMatchesByDepthInformation)
 {
   REQUIRE_TEXTURES();
-  const unsigned int target = 10;
-  Frame frame;
-  hslam_test::makeFrame(scene, target, params.tracker, frame);
-  const SE3d truth = hslam_test::groundTruthNewMref(scene, 0, target);
+  Frame frame10;
+  hslam_test::makeFrame(scene, 10, params.tracker, frame10);
   std::vector<ReferenceFeature> described = features;
   for (size_t i = 0; i < described.size(); ++i) {
     described[i].idepthVar = 1e-4 * static_cast<double>(1 + i % 4); // information 1, 1/2, 1/3, 1/4 of the best
   }
   vpHSlamParameters weighting = params;
   weighting.tracking.geometricDepthWeights = true;
-  for (bool on : {false, true}) {
-    HybridTracker hybrid(on ? weighting : params, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
-    hybrid.extract(frame.raw);
+  // The indirect step from the true pose of frame 10 with the given settings.
+  auto stepWith = [&](const vpHSlamParameters &settings) {
+    HybridTracker tracker(settings, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
+    tracker.extract(frame10.raw);
     IndirectStepResult out;
-    ASSERT_TRUE(hybrid.indirectStep(described, truth, out));
-    if (!on) {
-      EXPECT_TRUE(out.term.weights.empty());
-      EXPECT_EQ(out.term.count, 0.);
-      continue;
-    }
-    ASSERT_EQ(out.term.weights.size(), out.term.Xref.size());
-    const auto range = std::minmax_element(out.term.weights.begin(), out.term.weights.end());
-    EXPECT_DOUBLE_EQ(*range.second, 1.);
-    EXPECT_NEAR(*range.first, 0.25, 1e-9);
-    EXPECT_NEAR(out.term.count, std::accumulate(out.term.weights.begin(), out.term.weights.end(), 0.), 1e-9);
-    EXPECT_LT(out.term.count, static_cast<double>(out.term.Xref.size()));
-    EXPECT_GT(out.term.sigma2Px, 0.);
-  }
+    EXPECT_TRUE(tracker.indirectStep(described, hslam_test::groundTruthNewMref(scene, 0, 10), out));
+    return out;
+  };
+  const IndirectStepResult plain = stepWith(params);
+  EXPECT_TRUE(plain.term.weights.empty());
+  EXPECT_EQ(plain.term.count, 0.);
+
+  const IndirectStepResult weighted = stepWith(weighting);
+  ASSERT_EQ(weighted.term.weights.size(), weighted.term.Xref.size());
+  ASSERT_FALSE(weighted.term.weights.empty());
+  const auto range = std::minmax_element(weighted.term.weights.begin(), weighted.term.weights.end());
+  EXPECT_DOUBLE_EQ(*range.second, 1.);
+  EXPECT_NEAR(*range.first, 0.25, 1e-9);
+  EXPECT_NEAR(weighted.term.count, std::accumulate(weighted.term.weights.begin(), weighted.term.weights.end(), 0.),
+              1e-9);
+  EXPECT_LT(weighted.term.count, static_cast<double>(weighted.term.Xref.size()));
+  EXPECT_GT(weighted.term.sigma2Px, 0.);
+
   // An inlier without a variance (0: unknown, every second feature here) leaves every weight at 1.
   for (size_t i = 0; i < described.size(); i += 2) {
     described[i].idepthVar = 0.;
   }
-  HybridTracker hybrid(weighting, K, static_cast<int>(kWidth), static_cast<int>(kHeight));
-  hybrid.extract(frame.raw);
-  IndirectStepResult out;
-  ASSERT_TRUE(hybrid.indirectStep(described, truth, out));
-  EXPECT_TRUE(out.term.weights.empty());
-  EXPECT_EQ(out.term.count, 0.);
+  const IndirectStepResult unknown = stepWith(weighting);
+  EXPECT_TRUE(unknown.term.weights.empty());
+  EXPECT_EQ(unknown.term.count, 0.);
 }
 
 TEST_F(HybridTrackingTest, jointOptimisationRecoversAPerturbedPose)
@@ -427,20 +445,11 @@ TEST_F(HybridTrackingTest, jointOptimisationRecoversAPerturbedPose)
 TEST(HybridTrackingMath, geometryOnlyTermRecoversPoseWithoutPhotometricHelp)
 {
   // Pure geometry: the geometric energy alone, minimised by Gauss-Newton, returns to the truth.
-  PinholeIntrinsics K;
-  K.fx = K.fy = 500.;
-  K.cx = 320.;
-  K.cy = 240.;
-  const SE3d truth = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.2, 0.1, -0.1, 0.05, 0.02, -0.03).finished());
+  const PinholeIntrinsics K = squarePixelCamera();
+  const SE3d truth = geometryTestPose();
   const GeometricTerm term = syntheticTerm(truth, K, 80, 0.5, 11);
-  SE3d pose = SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.05, -0.05, 0.05, 0.02, 0.02, 0.02).finished()) * truth;
-  for (int it = 0; it < 10; ++it) {
-    Eigen::Matrix<double, 8, 8> H = Eigen::Matrix<double, 8, 8>::Zero();
-    Eigen::Matrix<double, 8, 1> b = Eigen::Matrix<double, 8, 1>::Zero();
-    CoarseTracker::geometricEnergy(term, K, pose, &H, &b);
-    const Eigen::Matrix<double, 6, 1> step = H.topLeftCorner<6, 6>().ldlt().solve(-b.head<6>());
-    pose = SE3d::exp(step) * pose;
-  }
+  const SE3d pose = minimiseGeometricEnergy(
+      term, K, SE3d::exp((Eigen::Matrix<double, 6, 1>() << 0.05, -0.05, 0.05, 0.02, 0.02, 0.02).finished()) * truth);
   EXPECT_LT((pose.translation() - truth.translation()).norm(), 0.01);
   EXPECT_LT((pose * truth.inverse()).log().tail<3>().norm(), 1e-3);
 }
