@@ -13,7 +13,8 @@
 #           features.desiredImmatureDensity in BUDGETS (one run says little: see the hybrid benchmark's
 #           spread), the runs' ATEs, mapping ms per keyframe (median of the runs' medians), re-activated and fused
 #           global points per keyframe, share of the window's points from the global map, culled keyframes,
-#           loops detected (sum over the runs: these sequences have none)
+#           loops detected (sum over the runs: these sequences have none); each map mode after the first is
+#           compared with the first (ratio of the median ATEs, its 90 % bootstrap interval: compare_medians)
 #   loop    the synthetic room filmed wall after wall (--look-outward), LOOP_LAPS laps of 400 frames, 320x240 with
 #           the effects below: a loop a sliding window cannot close by itself. Per tracking and map mode, the same runs and
 #           medians as "real", plus loops detected / corrected, the longest correction and lap_rpe: the translation
@@ -97,6 +98,20 @@ run_budgets() { # PREFIX SEQUENCE TRACKING MODE -> one run per point budget; set
   done
 }
 
+# against_first MODE: after the first map mode of a (sequence, tracking) group, the ratio of this mode's median ATE to
+# the first one's, its 90 % bootstrap interval (compare_medians) and the runs it won; remembers the first mode's ATEs.
+against_first() {
+  if [[ "$1" == "$first_map_mode" ]]; then
+    first_ates="${ates[*]}"
+    return
+  fi
+  read -r ratio lo hi wins pairs <<< "$(compare_medians "$first_ates" "${ates[*]}")"
+  printf "   %s / %s: ATE ratio %s, 90 %% interval [%s, %s], better in %s of %s runs\n" "$1" "$first_map_mode" "$ratio" \
+    "$lo" "$hi" "$wins" "$pairs"
+}
+read -r first_map_mode _ <<< "$map_modes"
+first_ates=""
+
 if has_section real; then
   echo "== real sequences: median of ${#budget_list[@]} runs (point budgets $budgets)"
   printf "%-28s %-7s %-9s %9s %8s %7s %7s %7s %7s %5s   %s\n" sequence track map ate map_ms react fused share culled \
@@ -109,6 +124,7 @@ if has_section real; then
         [[ ${#prefixes[@]} -gt 0 ]] || continue
         printf "%-28s %-7s %-9s %9.4f %s %5s   %s\n" "$seq" "$track" "$mode" "$(median "${ates[@]}")" \
           "$(reuse_columns "${prefixes[@]}")" "$(sum_json loops_detected "${prefixes[@]}")" "${ates[*]}"
+        against_first "$mode"
       done
     done
   done
@@ -160,6 +176,7 @@ if has_section loop; then
           "$(median "${maps[@]}")" \
           "$(sum_json loops_detected "${prefixes[@]}")/$(sum_json loops_corrected "${prefixes[@]}")" \
           "$(median "${detections[@]}")" "$verification" "$worst" "${ates[*]}"
+        against_first "$mode"
       done
     done
     echo
