@@ -24,11 +24,34 @@ struct DescentTables {
 };
 
 /*!
+  Child of \e node (not a leaf) whose centroid is closest to \e d; ties keep the first child, as DBoW2. kBuiltin:
+  distances by hammingDistanceBuiltin() (only where inlined into descendWithPopcnt()), else by hammingDistance().
+*/
+template <bool kBuiltin>
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline std::uint32_t
+closestChildIn(const DescentTables &t, const OrbDescriptor &d, std::uint32_t node)
+{
+  const std::uint32_t begin = t.childBegin[node], end = t.childBegin[node + 1];
+  std::uint32_t best = begin;
+  int bestDistance = kBuiltin ? hammingDistanceBuiltin(d, t.centroids[begin]) : hammingDistance(d, t.centroids[begin]);
+  for (std::uint32_t c = begin + 1; c < end; ++c) {
+    const int distance = kBuiltin ? hammingDistanceBuiltin(d, t.centroids[c]) : hammingDistance(d, t.centroids[c]);
+    if (distance < bestDistance) {
+      bestDistance = distance;
+      best = c;
+    }
+  }
+  return t.children[best];
+}
+
+/*!
   Descends all descriptors together, one level at a time, prefetching the children block of the descriptor a few
   places ahead: below the first levels every block is a cache miss, and interleaving hides most of the latency
   (about 2x faster than one descriptor at a time on 2000 descriptors). \e current ends at each descriptor's leaf,
-  \e indexNodes (optional) at its node of depth \e indexDepth. kBuiltin: distances by hammingDistanceBuiltin() (only
-  inlined into descendWithPopcnt()), else by hammingDistance(). Ties keep the first child, as DBoW2.
+  \e indexNodes (optional) at its node of depth \e indexDepth. kBuiltin: as closestChildIn().
 */
 template <bool kBuiltin>
 #if defined(__GNUC__)
@@ -51,22 +74,10 @@ descend(const DescentTables &t, const std::vector<OrbDescriptor> &descriptors, s
           __builtin_prefetch(block + offset);
         }
       }
-      const std::uint32_t begin = t.childBegin[current[i]], end = t.childBegin[current[i] + 1];
-      if (begin == end) {
+      if (t.childBegin[current[i]] == t.childBegin[current[i] + 1]) {
         continue; // reached a leaf already
       }
-      const OrbDescriptor &d = descriptors[i];
-      std::uint32_t best = begin;
-      int bestDistance =
-          kBuiltin ? hammingDistanceBuiltin(d, t.centroids[begin]) : hammingDistance(d, t.centroids[begin]);
-      for (std::uint32_t c = begin + 1; c < end; ++c) {
-        const int distance = kBuiltin ? hammingDistanceBuiltin(d, t.centroids[c]) : hammingDistance(d, t.centroids[c]);
-        if (distance < bestDistance) {
-          bestDistance = distance;
-          best = c;
-        }
-      }
-      current[i] = t.children[best];
+      current[i] = closestChildIn<kBuiltin>(t, descriptors[i], current[i]);
       if (indexNodes && depth <= indexDepth) {
         (*indexNodes)[i] = current[i];
       }
@@ -241,18 +252,8 @@ OrbVocabulary::Parts OrbVocabulary::parts() const
 
 std::uint32_t OrbVocabulary::closestChild(const OrbDescriptor &d, std::uint32_t node) const
 {
-  const std::uint32_t begin = m_childBegin[node], end = m_childBegin[node + 1];
-  const OrbDescriptor *centroids = m_childDescriptors.data() + 1;
-  std::uint32_t best = begin;
-  int bestDistance = hammingDistance(d, centroids[begin]);
-  for (std::uint32_t c = begin + 1; c < end; ++c) {
-    const int distance = hammingDistance(d, centroids[c]);
-    if (distance < bestDistance) { // ties keep the first child, as DBoW2
-      bestDistance = distance;
-      best = c;
-    }
-  }
-  return m_children[best];
+  const DescentTables tables{m_childBegin.data(), m_children.data(), m_childDescriptors.data() + 1, m_levels};
+  return closestChildIn<false>(tables, d, node);
 }
 
 std::uint32_t OrbVocabulary::wordOf(const OrbDescriptor &d, int indexDepth, std::uint32_t *indexNode) const
