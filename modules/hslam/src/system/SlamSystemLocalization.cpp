@@ -82,6 +82,9 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
       options.minInliers = m_params.tracking.relocalizationMinInliers;
       ++m_relocAttempts;
       const RelocalizationResult r = relocalize(f, pointers, m_preprocessor.intrinsics(), options);
+      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": place recognition, " << candidates.size()
+                                               << " candidates, " << r.candidatesTried << " tried, best " << r.matches
+                                               << " matches and " << r.inliers << " inliers");
       if (r.success) {
         ++m_relocSuccesses;
         located = true;
