@@ -82,9 +82,11 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
       options.minInliers = m_params.tracking.relocalizationMinInliers;
       ++m_relocAttempts;
       const RelocalizationResult r = relocalize(f, pointers, m_preprocessor.intrinsics(), options);
-      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": place recognition, " << candidates.size()
-                                               << " candidates, " << r.candidatesTried << " tried, best " << r.matches
-                                               << " matches and " << r.inliers << " inliers");
+      // As SlamSystem::relocalizePose logs it (on failure, the most matches and inliers any candidate had).
+      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
+                                               << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
+                                               << " tried, keyframe " << r.keyframeId << ", " << r.matches
+                                               << " matches, " << r.inliers << " inliers");
       if (r.success) {
         ++m_relocSuccesses;
         located = true;
