@@ -322,6 +322,47 @@ TEST(PointActivation, SelectPointsOnWindow)
   EXPECT_EQ(host.immature[3].u, 130.f);
 }
 
+TEST(PointActivation, DescriptorOnlyPointsAreNeverActivatedButDroppedAlike)
+{
+  // The first keyframe's corners (LocalMapper::initialize): traced for their depth only.
+  vpHSlamParameters params;
+  Window window = makeWindow();
+  Keyframe &host = *window.keyframes[0];
+  const Keyframe &newest = *window.keyframes[1];
+  ImmaturePoint kept = readyPoint(100.f, 60.f, 1.f, 0.01f); // ready, far from anything: activated if it could be
+  kept.descriptorOnly = true;
+  ImmaturePoint outside = readyPoint(10.f, 60.f, 1.f, 0.01f); // projects out of the newest keyframe
+  outside.descriptorOnly = true;
+  host.immature = {kept, outside, readyPoint(100.f, 20.f, 1.f, 0.01f)};
+  PointActivation activation(params.mapper);
+  activation.setMinDistance(2.f);
+  activation.buildDistanceMap(window.keyframes, newest);
+  const ActivationPlan plan = activation.selectPoints(window.keyframes, newest);
+  ASSERT_EQ(plan.activate.size(), 1u);
+  EXPECT_EQ(plan.activate[0].ref.pointIndex, 2) << "the ordinary point only";
+  ASSERT_EQ(plan.drop.size(), 1u);
+  EXPECT_EQ(plan.drop[0].pointIndex, 1);
+
+  // What may stand for a map point when its host leaves: a good, unambiguous trace and an interval within +-10 %.
+  const float minQuality = static_cast<float>(params.mapper.minTraceQuality);
+  EXPECT_TRUE(hslam::hasConvergedDepth(kept, minQuality));
+  ImmaturePoint wide = readyPoint(100.f, 60.f, 1.f, 0.11f);
+  EXPECT_FALSE(hslam::hasConvergedDepth(wide, minQuality));
+  wide = readyPoint(100.f, 60.f, 1.f, 0.09f);
+  EXPECT_TRUE(hslam::hasConvergedDepth(wide, minQuality));
+  ImmaturePoint ambiguous = kept;
+  ambiguous.quality = minQuality;
+  EXPECT_FALSE(hslam::hasConvergedDepth(ambiguous, minQuality));
+  for (const TraceStatus s : {TraceStatus::skipped, TraceStatus::outlier, TraceStatus::uninitialized}) {
+    ImmaturePoint notGood = kept;
+    notGood.lastStatus = s;
+    EXPECT_FALSE(hslam::hasConvergedDepth(notGood, minQuality));
+  }
+  ImmaturePoint untraced = kept;
+  untraced.idepthMax = std::numeric_limits<float>::infinity();
+  EXPECT_FALSE(hslam::hasConvergedDepth(untraced, minQuality));
+}
+
 TEST(PointActivation, ReadinessFollowsDso)
 {
   vpHSlamParameters params;

@@ -340,6 +340,40 @@ TEST_F(HybridTrackingTest, sharedSelectionPutsCornersFirstWithinTheirShare)
   }
 }
 
+TEST_F(HybridTrackingTest, sharedSelectionTakesOneKindWhenAsked)
+{
+  // The first keyframe's initial points are gradient pixels only, its corners come next (LocalMapper::initialize).
+  REQUIRE_TEXTURES();
+  SharedPointSelector shared(params.features, true);
+  std::vector<SelectedPixel> both, corners, gradients, plain;
+  std::vector<bool> bothFlags, cornerFlags, gradientFlags;
+  shared.select(reference.raw, reference.pyramid, 1000, 3, both, bothFlags);
+  const int cornerCount = shared.lastCorners();
+  ASSERT_GT(cornerCount, 50);
+  shared.select(reference.raw, reference.pyramid, 1000, 3, corners, cornerFlags, SharedPointSelector::cornersOnly);
+  ASSERT_EQ(corners.size(), static_cast<size_t>(cornerCount)) << "the corners of the full selection, no more";
+  for (size_t i = 0; i < corners.size(); ++i) {
+    EXPECT_EQ(corners[i].u, both[i].u);
+    EXPECT_EQ(corners[i].v, both[i].v);
+    EXPECT_TRUE(cornerFlags[i]);
+  }
+  // Fresh selectors: the gradient selector adapts its cell size from one call to the next.
+  SharedPointSelector(params.features, true)
+      .select(reference.raw, reference.pyramid, 1000, 3, gradients, gradientFlags, SharedPointSelector::gradientsOnly);
+  PixelSelector(params.features).select(reference.pyramid, 1000, 3, plain);
+  ASSERT_EQ(gradients.size(), plain.size());
+  for (size_t i = 0; i < gradients.size(); ++i) {
+    EXPECT_EQ(gradients[i].u, plain[i].u);
+    EXPECT_EQ(gradients[i].v, plain[i].v);
+    EXPECT_FALSE(gradientFlags[i]);
+  }
+  // Descriptors off: there are no corners to take.
+  SharedPointSelector direct(params.features, false);
+  direct.select(reference.raw, reference.pyramid, 1000, 3, corners, cornerFlags, SharedPointSelector::cornersOnly);
+  EXPECT_TRUE(corners.empty());
+  EXPECT_TRUE(cornerFlags.empty());
+}
+
 TEST_F(HybridTrackingTest, indirectStepMatchesAndRecoversThePose)
 {
   REQUIRE_TEXTURES();

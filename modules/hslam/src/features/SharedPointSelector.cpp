@@ -17,12 +17,15 @@ SharedPointSelector::SharedPointSelector(const vpHSlamParameters::Features &para
 
 void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount,
                                  unsigned int seed, std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner,
-                                 bool withCorners)
+                                 Kinds kinds)
 {
   selected.clear();
   isCorner.clear();
   m_lastCorners = 0;
-  if (!m_withDescriptors || !withCorners || m_params.maxCorners <= 0) {
+  if (!m_withDescriptors || kinds == gradientsOnly || m_params.maxCorners <= 0) {
+    if (kinds == cornersOnly) {
+      return;
+    }
     m_gradients.select(pyramid, desiredCount, seed, selected);
     isCorner.assign(selected.size(), false);
     return;
@@ -45,6 +48,9 @@ void SharedPointSelector::select(const vpImage<unsigned char> &raw, const ImageP
   }
   m_lastCorners = static_cast<int>(m_corners.size());
   isCorner.assign(selected.size(), true);
+  if (kinds == cornersOnly) {
+    return;
+  }
   // The gradient selector keeps its whole budget (corners come on top): taking cells away from it cost accuracy
   // (see the file comment). A gradient pixel on a corner's own pixel is dropped (the point exists already).
   m_gradients.select(pyramid, desiredCount, seed, m_gradientPixels);

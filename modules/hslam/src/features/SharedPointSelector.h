@@ -45,6 +45,13 @@ public:
   */
   SharedPointSelector(const vpHSlamParameters::Features &params, bool withDescriptors);
 
+  //! Which points select() takes. With descriptors off: gradient pixels (none for cornersOnly) whatever is asked.
+  enum Kinds {
+    cornersAndGradients, //!< the corners, then the gradient pixels (a keyframe's points)
+    gradientsOnly,       //!< gradient pixels only (the first keyframe's initial points, see LocalMapper::initialize)
+    cornersOnly          //!< the corners only, their budget computed from \e desiredCount as usual
+  };
+
   /*!
     Select the points of a frame: corners (strongest first, see the file comment for their budget), then about
     \e desiredCount gradient pixels.
@@ -52,10 +59,10 @@ public:
     \param pyramid : its photometric pyramid (gradient selection).
     \param selected : output pixels, corners first.
     \param isCorner : output, per selected pixel.
-    \param withCorners : false: gradient pixels only (descriptors are still computed by describe()).
+    \param kinds : which kinds of points (descriptors are computed by describe() for any of them).
   */
   void select(const vpImage<unsigned char> &raw, const ImagePyramid &pyramid, int desiredCount, unsigned int seed,
-              std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner, bool withCorners = true);
+              std::vector<SelectedPixel> &selected, std::vector<bool> &isCorner, Kinds kinds = cornersAndGradients);
 
   /*!
     Oriented ORB descriptors at \e pixels of \e raw (PointDescriptors). \e valid is false for pixels too close to

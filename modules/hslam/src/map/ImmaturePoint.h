@@ -16,6 +16,7 @@
 #include "features/PatchPattern.h"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -46,7 +47,21 @@ struct ImmaturePoint {
   OrbDescriptor orb;                             //!< ORB descriptor at the host pixel (descriptor sharing)
   float orbAngleDeg = 0.f;                       //!< its orientation, degrees
   bool hasOrb = false;                           //!< false in direct mode or too close to the border
+  //! Never activated: traced only for its depth, and kept in the global map when its host leaves the window with
+  //! that depth converged (hasConvergedDepth()). The first keyframe's corners (LocalMapper::initialize).
+  bool descriptorOnly = false;
 };
+
+//! An immature point's depth interval is below this share of its sum (+-10 %): it may stand for a map point.
+constexpr float kMaxConvergedRelativeInterval = 0.1f;
+
+//! Whether \e pt's last trace was good, its match unambiguous (quality above \e minQuality) and its interval narrow.
+inline bool hasConvergedDepth(const ImmaturePoint &pt, float minQuality)
+{
+  return pt.lastStatus == TraceStatus::good && pt.quality > minQuality && pt.idepthMin > 0.f &&
+         std::isfinite(pt.idepthMax) &&
+         pt.idepthMax - pt.idepthMin <= kMaxConvergedRelativeInterval * (pt.idepthMax + pt.idepthMin);
+}
 } // namespace hslam
 
 #endif

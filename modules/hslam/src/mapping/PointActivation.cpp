@@ -288,7 +288,7 @@ ActivationPlan PointActivation::selectPoints(const std::vector<KeyframePtr> &win
         plan.drop.push_back(ref); // not visible in the newest keyframe
         continue;
       }
-      if (!canActivate(um, vm, pt.selectionLevel)) {
+      if (pt.descriptorOnly || !canActivate(um, vm, pt.selectionLevel)) {
         continue;
       }
       addActivated(iu, iv);

@@ -257,8 +257,11 @@ private:
   void finishKeyframe(const KeyframePtr &kf, int seedKeyframe = -1);
   void buildReferencePoints();
   void dropPointsOutOfView(const Keyframe &newest);
-  void makeNewImmaturePoints(Keyframe &kf);
+  //! Select a keyframe's new immature points: corners and gradient pixels, or its corners only.
+  void makeNewImmaturePoints(Keyframe &kf, bool cornersOnly = false);
   void marginalize(int keyframeId);
+  //! Turn \e kf's descriptor-only immature points whose depth converged into marginalised points (kf leaves now).
+  void keepConvergedDescriptorPoints(Keyframe &kf);
   //! Copy a marginalised keyframe into the global map with its pose-pose links (before the optimiser drops it).
   void storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs);
   //! A window keyframe as the global map keeps it: marginalised points, and active ones too when asked (saveMap).

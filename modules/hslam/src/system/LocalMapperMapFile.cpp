@@ -15,8 +15,6 @@ namespace hslam
 {
 namespace
 {
-//! An immature point goes into a saved map when its inverse-depth interval is below this share of its sum (+-10 %).
-constexpr float kMaxImmatureRelativeInterval = 0.1f;
 } // namespace
 
 void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges)
@@ -33,9 +31,7 @@ void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vecto
     // The newest keyframes' points are mostly still immature: those whose depth interval has converged are kept too
     // (variance: the half interval squared), or the end of the run has no map to locate a camera in.
     for (const ImmaturePoint &pt : kf->immature) {
-      if (!pt.hasOrb || pt.lastStatus != TraceStatus::good || !(pt.quality > minQuality) || !(pt.idepthMin > 0.f) ||
-          !std::isfinite(pt.idepthMax) ||
-          pt.idepthMax - pt.idepthMin > kMaxImmatureRelativeInterval * (pt.idepthMax + pt.idepthMin)) {
+      if (!pt.hasOrb || !hasConvergedDepth(pt, minQuality)) {
         continue;
       }
       GlobalPoint q;
