@@ -208,7 +208,7 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
     // and that go into the global map with the keyframe when their depth has converged (marginalize()). Without
     // them its descriptors all sat on edge pixels, which a returning camera's FAST corners rarely meet: a
     // real-time map was relocalised at its start with 21-23 PnP inliers (30 needed) in 8 of 19 runs. Activated like
-    // any keyframe's corners they made three synthetic system tests fail (the window is tuned without them).
+    // any keyframe's corners they made three synthetic system tests fail (README, "Corners of the first keyframe").
     makeNewImmaturePoints(*kf0, /*cornersOnly=*/true);
     for (ImmaturePoint &pt : kf0->immature) {
       pt.descriptorOnly = true;
