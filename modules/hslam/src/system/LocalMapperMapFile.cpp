@@ -13,10 +13,6 @@
 
 namespace hslam
 {
-namespace
-{
-} // namespace
-
 void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges)
 {
   Impl &m = *m_impl;

@@ -139,6 +139,12 @@ private:
     \e described: the frame had features to match (false for a black frame).
   */
   bool relocalizePose(const FramePtr &frame, CoarseMotionHistory &history, bool &described);
+  /*!
+    Place recognition for \e frame (described as \e features): the bag-of-words candidates of the map (\e preferred
+    first when it is one), ORB matching and PnP RANSAC with tracking.relocalizationMinInliers; logged at debug level.
+  */
+  RelocalizationResult relocalizeByPlaceRecognition(const FramePtr &frame, RelocalizationFrame &features,
+                                                    int preferred = -1);
   //! Keep \e r (a bag-of-words relocalisation of \e frame) as m_storedMapFix and say whether it agrees with the
   //! previous frame's.
   void recordStoredMapFix(const FramePtr &frame, const RelocalizationResult &r);

@@ -68,25 +68,8 @@ vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
   if (!located) {
     RelocalizationFrame f = m_hybrid->relocalizationFrame();
     if (!f.descriptors.empty()) {
-      std::vector<RelocalizationKeyframe> candidates;
-      {
-        std::lock_guard<std::mutex> lock(m_mapperMutex);
-        candidates =
-            m_mapper->relocalizationCandidates(f, m_params.tracking.relocalizationCandidates, m_localizedKeyframe);
-      }
-      std::vector<const RelocalizationKeyframe *> pointers;
-      for (const RelocalizationKeyframe &k : candidates) {
-        pointers.push_back(&k);
-      }
-      RelocalizerOptions options;
-      options.minInliers = m_params.tracking.relocalizationMinInliers;
       ++m_relocAttempts;
-      const RelocalizationResult r = relocalize(f, pointers, m_preprocessor.intrinsics(), options);
-      // As SlamSystem::relocalizePose logs it (on failure, the most matches and inliers any candidate had).
-      VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
-                                               << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
-                                               << " tried, keyframe " << r.keyframeId << ", " << r.matches
-                                               << " matches, " << r.inliers << " inliers");
+      const RelocalizationResult r = relocalizeByPlaceRecognition(frame, f, m_localizedKeyframe);
       if (r.success) {
         ++m_relocSuccesses;
         located = true;

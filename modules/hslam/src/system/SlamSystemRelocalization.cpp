@@ -29,23 +29,8 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
     m_lostSince = frame->timestamp;
     return false;
   }
-  std::vector<RelocalizationKeyframe> candidates;
-  {
-    synchronize(); // nothing is queued while lost; this only waits for a job still running
-    std::lock_guard<std::mutex> lock(m_mapperMutex);
-    candidates = m_mapper->relocalizationCandidates(lost, m_params.tracking.relocalizationCandidates);
-  }
-  std::vector<const RelocalizationKeyframe *> pointers;
-  for (const RelocalizationKeyframe &k : candidates) {
-    pointers.push_back(&k);
-  }
-  RelocalizerOptions options;
-  options.minInliers = m_params.tracking.relocalizationMinInliers;
-  RelocalizationResult r = relocalize(lost, pointers, m_preprocessor.intrinsics(), options);
-  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
-                                           << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
-                                           << " tried, keyframe " << r.keyframeId << ", " << r.matches << " matches, "
-                                           << r.inliers << " inliers");
+  synchronize(); // nothing is queued while lost; this only waits for a job still running
+  RelocalizationResult r = relocalizeByPlaceRecognition(frame, lost);
   recordStoredMapFix(frame, r);
   if (!r.success && m_windowRelocalization && m_params.tracking.relocalizeInWindow) {
     // The window's keyframes with ORB points triangulated between them (see WindowRelocalization.h).
@@ -59,7 +44,7 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
     const double t1 = nowMs();
     const RelocalizationFrame described = m_windowRelocalization->describe(frame->raw);
     RelocalizerOptions windowOptions = WindowRelocalization::matchingOptions();
-    windowOptions.minInliers = options.minInliers;
+    windowOptions.minInliers = m_params.tracking.relocalizationMinInliers;
     r = relocalize(described, {&window}, m_preprocessor.intrinsics(), windowOptions);
     if (r.success) {
       // Only these matches may confirm the alignment later (SlamSystem::trackInitialized): the window's corners
@@ -82,6 +67,29 @@ bool SlamSystem::relocalizePose(const FramePtr &frame, CoarseMotionHistory &hist
   history.prelastMref = history.lastMref;
   history.lastAffine = m_lastAffine;
   return true;
+}
+
+RelocalizationResult SlamSystem::relocalizeByPlaceRecognition(const FramePtr &frame, RelocalizationFrame &features,
+                                                              int preferred)
+{
+  std::vector<RelocalizationKeyframe> candidates;
+  {
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    candidates = m_mapper->relocalizationCandidates(features, m_params.tracking.relocalizationCandidates, preferred);
+  }
+  std::vector<const RelocalizationKeyframe *> pointers;
+  for (const RelocalizationKeyframe &k : candidates) {
+    pointers.push_back(&k);
+  }
+  RelocalizerOptions options;
+  options.minInliers = m_params.tracking.relocalizationMinInliers;
+  const RelocalizationResult r = relocalize(features, pointers, m_preprocessor.intrinsics(), options);
+  // On failure: the most matches and inliers any candidate had.
+  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": relocalisation " << (r.success ? "found" : "no")
+                                           << " pose, " << candidates.size() << " candidates, " << r.candidatesTried
+                                           << " tried, keyframe " << r.keyframeId << ", " << r.matches << " matches, "
+                                           << r.inliers << " inliers");
+  return r;
 }
 
 bool SlamSystem::relocalizationConfirmed(const FramePtr &frame, bool aligned, const SE3d &cMwAligned,
