@@ -49,7 +49,8 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #     closure solves with Eigen's sparse Cholesky, not CHOLMOD's OpenMP pool); the loop code runs in the other loop
 #     and map tests;
 #   SystemLoop.NoFalseLoopOnSequencesWithoutOne: detection and verification run in RealTimeLoopCorrection and loop.*;
-#   SystemReal.SevenScenes{CoveredLens,LongCover,EarlyCover}*, SystemReal.TsukubaCoverIsNotRelocalisedOnARepeatedTexture,
+#   SystemReal.SevenScenes{CoveredLens,LongCover,EarlyCover}*,
+#     SystemReal.TsukubaCoverIsNotRelocalisedOnARepeatedTexture,
 #     SystemReal.KittiCarFoundAgainKeepsItsMotionAndRenewsItsWindow (KittiCoverIsBridged* runs that path),
 #     SystemSynthetic.CoveredLensIsRelocalisedWithDirectTracking*,
 #     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
@@ -58,8 +59,8 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
 #   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
 #     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking.
-long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|SystemReal\.(SevenScenes(CoveredLens|LongCover|EarlyCover)|TsukubaCover|'
-long+='KittiCarFound)|'
+long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|'
+long+='SystemReal\.(SevenScenes(CoveredLens|LongCover|EarlyCover)|TsukubaCover|KittiCarFound)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
 long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
 long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding'
