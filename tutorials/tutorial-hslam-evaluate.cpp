@@ -32,6 +32,8 @@ struct Options {
   double rpeDelta = 1.;
   double rpeDistance = 0.;
   double segmentLength = 0.;
+  double from = -HUGE_VAL; // estimate poses before this time (s) are left out
+  double to = HUGE_VAL;    // and after this one
 };
 
 void printUsage(const char *program)
@@ -56,6 +58,8 @@ void printUsage(const char *program)
       << "  --rpe-delta S          RPE over S seconds (default 1)\n"
       << "  --rpe-distance M       RPE over M metres of ground-truth path instead of time\n"
       << "  --segment-length S     also print the TUM monoVO alignment error with start/end segments of S seconds\n"
+      << "  --from S / --to S      evaluate only the estimate's poses from / up to timestamp S, seconds as in the\n"
+      << "                         file (e.g. only the frames another system tracked too; default: every pose)\n"
       << "  --plot FILE.png        write a top view of ground truth and aligned estimate\n"
       << "  --help                 this text\n";
 }
@@ -117,6 +121,10 @@ int parseArguments(int argc, char **argv, Options &options)
       ok = parseNumber(arg, value, options.rpeDistance, false);
     } else if (arg == "--segment-length") {
       ok = parseNumber(arg, value, options.segmentLength, false);
+    } else if (arg == "--from") {
+      ok = parseNumber(arg, value, options.from, true);
+    } else if (arg == "--to") {
+      ok = parseNumber(arg, value, options.to, true);
     } else {
       std::cerr << "error: unknown option " << arg << " (see --help)" << std::endl;
       return 1;
@@ -127,6 +135,10 @@ int parseArguments(int argc, char **argv, Options &options)
   }
   if (options.groundTruth.empty() || options.estimate.empty()) {
     std::cerr << "error: --groundtruth and --estimate are required (see --help)" << std::endl;
+    return 1;
+  }
+  if (options.from > options.to) {
+    std::cerr << "error: --from " << options.from << " is after --to " << options.to << std::endl;
     return 1;
   }
   return 0;
@@ -196,7 +208,12 @@ int run(const Options &options)
   const vpHSlamTrajectoryEvaluator::Alignment alignment =
       vpHSlamTrajectoryEvaluator::alignmentFromString(options.align);
   const vpHSlamTrajectory groundTruth = readGroundTruth(options);
-  const vpHSlamTrajectory estimate = readEstimate(options);
+  const vpHSlamTrajectory estimate = readEstimate(options).timeSpan(options.from, options.to);
+  if (estimate.empty()) {
+    std::cerr << "error: no estimated pose between --from " << options.from << " and --to " << options.to << " s"
+              << std::endl;
+    return EXIT_FAILURE;
+  }
   const vpHSlamTrajectoryEvaluator evaluator(groundTruth, estimate, options.maxDt);
 
   std::printf("matched=%zu\n", evaluator.getMatchedCount());

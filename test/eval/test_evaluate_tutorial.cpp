@@ -113,3 +113,45 @@ TEST(EvaluateTutorial, BadInputExitsNonZeroWithMessage)
   std::remove(good.c_str());
   std::remove(bad.c_str());
 }
+
+TEST(EvaluateTutorial, FromAndToEvaluateOnlyThePosesBetweenThem)
+{
+  HSLAM_REQUIRE_TUTORIAL();
+  const std::string dir = ::testing::TempDir();
+  const std::string truth = dir + "/hslam_eval_span_gt_" + std::to_string(::getpid()) + ".txt";
+  const std::string estimate = dir + "/hslam_eval_span_est_" + std::to_string(::getpid()) + ".txt";
+  {
+    // A straight line; the estimate is exact from t = 1 s on and 0.5 m off sideways before it.
+    std::ofstream g(truth);
+    std::ofstream e(estimate);
+    for (int i = 0; i < 20; ++i) {
+      const double t = 0.1 * i;
+      g << t << " " << i << " 0 0 0 0 0 1\n";
+      e << t << " " << i << " " << (i < 10 ? 0.5 : 0.) << " 0 0 0 0 1\n";
+    }
+  }
+  const std::string files = "--groundtruth " + truth + " --estimate " + estimate + " --align se3";
+  const RunResult whole = runTutorial(files);
+  ASSERT_EQ(whole.exitCode, 0) << whole.output;
+  EXPECT_EQ(valueOf(whole.output, "matched"), 20.) << whole.output;
+  EXPECT_GT(valueOf(whole.output, "ate_rmse_m"), 0.1) << whole.output;
+
+  const RunResult late = runTutorial(files + " --from 0.95");
+  ASSERT_EQ(late.exitCode, 0) << late.output;
+  EXPECT_EQ(valueOf(late.output, "matched"), 10.) << late.output;
+  EXPECT_NEAR(valueOf(late.output, "ate_rmse_m"), 0., 1e-6) << late.output;
+
+  const RunResult early = runTutorial(files + " --to 0.45");
+  ASSERT_EQ(early.exitCode, 0) << early.output;
+  EXPECT_EQ(valueOf(early.output, "matched"), 5.) << early.output;
+  EXPECT_NEAR(valueOf(early.output, "ate_rmse_m"), 0., 1e-6) << early.output; // offset alike: aligned away
+
+  const RunResult reversed = runTutorial(files + " --from 1 --to 0.5");
+  EXPECT_NE(reversed.exitCode, 0);
+  EXPECT_NE(reversed.output.find("--from"), std::string::npos) << reversed.output;
+  const RunResult empty = runTutorial(files + " --from 5");
+  EXPECT_NE(empty.exitCode, 0);
+  EXPECT_NE(empty.output.find("no estimated pose"), std::string::npos) << empty.output;
+  std::remove(truth.c_str());
+  std::remove(estimate.c_str());
+}

@@ -256,3 +256,21 @@ TEST(TrajectoryIo, BrokenFilesNameFileAndLine)
   const vpHSlamTrajectory one = vpHSlamTrajectory::readTum(file.path);
   EXPECT_THROW(one.saveTum(::testing::TempDir() + "/no_such_dir/x/traj.txt"), vpHSlamException);
 }
+
+TEST(TrajectoryIo, TimeSpanKeepsThePosesInsideItsBoundsInOrder)
+{
+  vpHSlamTrajectory trajectory;
+  for (int i = 0; i < 10; ++i) {
+    trajectory.add(0.5 * i, vpHomogeneousMatrix(i, 0., 0., 0., 0., 0.));
+  }
+  const vpHSlamTrajectory span = trajectory.timeSpan(1., 3.);
+  ASSERT_EQ(span.size(), 5u); // 1.0, 1.5, 2.0, 2.5, 3.0: both bounds included
+  for (size_t i = 0; i < span.size(); ++i) {
+    EXPECT_EQ(span.getTimestamp(i), 1. + 0.5 * static_cast<double>(i));
+    EXPECT_EQ(span.get_wMc(i)[0][3], 2. + static_cast<double>(i));
+  }
+  EXPECT_TRUE(trajectory.timeSpan(10., 20.).empty());
+  EXPECT_EQ(trajectory.timeSpan(-1., 100.).size(), trajectory.size());
+  EXPECT_NE(errorOf([&] { trajectory.timeSpan(3., 1.); }).find("not before"), std::string::npos);
+  EXPECT_THROW(trajectory.timeSpan(std::nan(""), 1.), vpHSlamException);
+}

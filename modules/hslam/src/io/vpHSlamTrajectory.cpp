@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <string>
 
 vpHSlamTrajectory::vpHSlamTrajectory() = default;
 
@@ -61,6 +62,21 @@ void vpHSlamTrajectory::transformLeft(const vpHomogeneousMatrix &aMw)
   for (vpHomogeneousMatrix &wMc : m_wMc) {
     wMc = aMw * wMc;
   }
+}
+
+vpHSlamTrajectory vpHSlamTrajectory::timeSpan(double from, double to) const
+{
+  if (!(from <= to)) { // also refuses NaN
+    throw vpHSlamException(vpHSlamException::invalidArgument, "trajectory time span: start " + std::to_string(from) +
+                                                                  " s is not before end " + std::to_string(to) + " s");
+  }
+  vpHSlamTrajectory span;
+  for (size_t i = 0; i < m_timestamps.size(); ++i) {
+    if (m_timestamps[i] >= from && m_timestamps[i] <= to) {
+      span.add(m_timestamps[i], m_wMc[i]);
+    }
+  }
+  return span;
 }
 
 vpHSlamTrajectory vpHSlamTrajectory::readTum(const std::string &path)

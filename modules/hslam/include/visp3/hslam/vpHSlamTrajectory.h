@@ -78,6 +78,9 @@ public:
   void transformRight(const vpHomogeneousMatrix &cMs);
   //! Replace every pose wMc by aMw * wMc (change of world frame).
   void transformLeft(const vpHomogeneousMatrix &aMw);
+  //! The poses whose timestamps lie in [\e from, \e to] seconds, in their order (e.g. to compare with a system that
+  //! starts later). \throw vpHSlamException when \e from > \e to or either is NaN.
+  vpHSlamTrajectory timeSpan(double from, double to) const;
 
   //! Read a TUM trajectory. \throw vpHSlamException naming file:line.
   static vpHSlamTrajectory readTum(const std::string &path);
