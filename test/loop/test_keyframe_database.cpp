@@ -1,13 +1,17 @@
 // Keyframe database: inverted index bookkeeping, scoring, exclusion, expected-score normalisation, co-visibility
 // grouping, and concurrent use.
 #include "HSlamTestErrors.h"
+#include "HSlamTestHeap.h"
 
 #include "features/OrbVocabulary.h"
 #include "loop/KeyframeDatabase.h"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
+#include <cstdio>
+#include <random>
 #include <thread>
 
 namespace
@@ -158,5 +162,38 @@ TEST(KeyframeDatabase, ConcurrentAddsRemovesAndQueries)
   stop = true;
   reader.join();
   EXPECT_EQ(db.size(), 1000u);
+}
+TEST(KeyframeDatabase, MemoryCountIsTheHeapItTakes)
+{
+  // memoryBytes() goes into the statistics' memory per stored keyframe: it must be what the inverted index and the
+  // stored vectors take from the heap, hash nodes and growth slack included.
+  if (!hslam_test::heapMeasurable()) {
+    GTEST_SKIP() << "needs glibc's own malloc (mallinfo2) to measure the heap";
+  }
+  constexpr std::uint32_t kWords = 100000;
+  std::mt19937 rng(3);
+  std::vector<BowVector> vectors;
+  for (int k = 0; k < 60; ++k) {
+    std::vector<std::uint32_t> words;
+    for (int i = 0; i < 400; ++i) {
+      words.push_back(static_cast<std::uint32_t>(rng() % 3000)); // shared words: index lists of many keyframes
+    }
+    std::sort(words.begin(), words.end());
+    words.erase(std::unique(words.begin(), words.end()), words.end());
+    BowVector bow;
+    for (std::uint32_t w : words) {
+      bow.push_back({w, 1. / static_cast<double>(words.size())});
+    }
+    vectors.push_back(bow);
+  }
+  const std::size_t heapBefore = hslam_test::heapInUse();
+  KeyframeDatabase db(kWords);
+  for (int k = 0; k < 60; ++k) {
+    db.add(k, vectors[static_cast<std::size_t>(k)]);
+  }
+  const double heap = static_cast<double>(hslam_test::heapInUse() - heapBefore);
+  const double counted = db.memoryBytes();
+  std::printf("60 keyframes: heap %.1f KB, counted %.1f KB\n", heap / 1024., counted / 1024.);
+  EXPECT_NEAR(counted, heap, 0.05 * heap);
 }
 } // namespace

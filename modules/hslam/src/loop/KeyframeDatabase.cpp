@@ -3,6 +3,7 @@
  */
 #include "loop/KeyframeDatabase.h"
 
+#include "common/HeapBytes.h"
 #include "features/OrbVocabulary.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -207,5 +208,17 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     }
   }
   return result;
+}
+double KeyframeDatabase::memoryBytes() const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  double bytes = hashNodesHeapBytes(m_index) + hashNodesHeapBytes(m_vectors);
+  for (const auto &word : m_index) {
+    bytes += vectorHeapBytes(word.second);
+  }
+  for (const auto &keyframe : m_vectors) {
+    bytes += vectorHeapBytes(keyframe.second);
+  }
+  return bytes;
 }
 } // namespace hslam

@@ -89,6 +89,8 @@ public:
   std::size_t size() const;
   bool contains(KeyframeId id) const;
   std::size_t wordCount() const { return m_wordCount; }
+  //! Bytes held on the heap: the inverted index and the stored vectors, allocator overhead included.
+  double memoryBytes() const;
 
   //! Candidates for \e bow, best first (see the class comment).
   std::vector<Candidate> query(const BowVector &bow, const Query &query) const;

@@ -3,6 +3,8 @@
  */
 #include "map/GlobalMap.h"
 
+#include "common/HeapBytes.h"
+
 #include <algorithm>
 #include <cstddef>
 #include <cstdlib>
@@ -196,22 +198,18 @@ size_t GlobalMap::pointCount() const
 
 double GlobalMap::memoryBytes() const
 {
-  // std::map nodes: the value plus about four pointers of bookkeeping each.
-  constexpr double kMapNodeOverhead = 4. * sizeof(void *);
-  double bytes = 0.;
+  // Every block the map holds, allocator overhead included (common/HeapBytes.h).
+  double bytes = mapNodesHeapBytes(m_keyframes);
   for (const auto &k : m_keyframes) {
-    bytes += sizeof(GlobalKeyframe) + kMapNodeOverhead;
-    bytes += static_cast<double>(k.second.points.capacity() * sizeof(GlobalPoint));
+    bytes += vectorHeapBytes(k.second.points);
     for (const GlobalPoint &p : k.second.points) {
-      bytes += static_cast<double>(p.observers.capacity() * sizeof(int));
-      bytes += static_cast<double>(p.observedAt.capacity() * sizeof(std::array<float, 2>));
+      bytes += vectorHeapBytes(p.observers) + vectorHeapBytes(p.observedAt);
     }
   }
+  bytes += mapNodesHeapBytes(m_shared);
   for (const auto &row : m_shared) {
-    bytes += sizeof(row) + kMapNodeOverhead;
-    bytes += static_cast<double>(row.second.size()) * (sizeof(std::pair<int, int>) + kMapNodeOverhead);
+    bytes += mapNodesHeapBytes(row.second);
   }
-  bytes += static_cast<double>(m_posePose.capacity() * sizeof(PosePoseEdge));
-  return bytes;
+  return bytes + vectorHeapBytes(m_posePose);
 }
 } // namespace hslam

@@ -3,6 +3,8 @@
  */
 #include "tracking/RelocalizationIndex.h"
 
+#include "common/HeapBytes.h"
+
 namespace hslam
 {
 RelocalizationIndex::RelocalizationIndex(const OrbVocabulary &vocabulary)
@@ -91,13 +93,14 @@ void RelocalizationIndex::clear()
 
 double RelocalizationIndex::memoryBytes() const
 {
-  double bytes = 0.;
-  for (const auto &entry : m_bowSizes) {
-    // A BoW entry (word, weight) in the vector and in the inverted index.
-    bytes += static_cast<double>(entry.second) * 2. * (sizeof(std::uint32_t) + sizeof(double));
-  }
+  // Every block held, allocator overhead included (common/HeapBytes.h).
+  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_bowSizes) + mapNodesHeapBytes(m_points);
   for (const auto &entry : m_points) {
-    bytes += static_cast<double>(entry.second.wX.size()) * (sizeof(Eigen::Vector3d) + sizeof(OrbDescriptor));
+    const RelocalizationKeyframe &k = entry.second;
+    bytes += vectorHeapBytes(k.wX) + vectorHeapBytes(k.descriptors) + vectorHeapBytes(k.direct);
+    for (const FeatureGroup &group : k.direct) {
+      bytes += vectorHeapBytes(group.features);
+    }
   }
   return bytes;
 }

@@ -57,7 +57,7 @@ public:
   void removeKeyframe(int id);
   void clear();
   std::size_t size() const { return m_database.size(); }
-  //! Bytes held (BoW vectors, stored points), an estimate for the memory statistics.
+  //! Bytes held on the heap (database, stored points and their direct indices), allocator overhead included.
   double memoryBytes() const;
 
 private:
