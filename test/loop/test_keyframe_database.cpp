@@ -195,5 +195,13 @@ TEST(KeyframeDatabase, MemoryCountIsTheHeapItTakes)
   const double counted = db.memoryBytes();
   std::printf("60 keyframes: heap %.1f KB, counted %.1f KB\n", heap / 1024., counted / 1024.);
   EXPECT_NEAR(counted, heap, 0.05 * heap);
+  // The count is kept up to date as keyframes leave (culling), not recomputed from the whole index.
+  for (int k = 0; k < 60; k += 3) {
+    ASSERT_TRUE(db.remove(k));
+  }
+  const double heapAfter = static_cast<double>(hslam_test::heapInUse() - heapBefore);
+  std::printf("40 keyframes left: heap %.1f KB, counted %.1f KB\n", heapAfter / 1024., db.memoryBytes() / 1024.);
+  EXPECT_LT(heapAfter, heap);
+  EXPECT_NEAR(db.memoryBytes(), heapAfter, 0.05 * heapAfter);
 }
 } // namespace

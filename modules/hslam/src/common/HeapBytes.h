@@ -38,21 +38,30 @@ template <typename T> double vectorHeapBytes(const std::vector<T> &v)
   return heapBlockBytes(v.capacity() * sizeof(T));
 }
 
+//! Heap bytes of one node of a std::map type (without what its value holds itself).
+template <typename Map> double treeNodeHeapBytes()
+{
+  constexpr std::size_t kNodeHeader = 4 * sizeof(void *); // colour (padded) and parent, left, right links
+  return heapBlockBytes(kNodeHeader + sizeof(typename Map::value_type));
+}
+
 //! Heap bytes of a std::map's nodes (without what the values hold themselves).
 template <typename K, typename V, typename C, typename A> double mapNodesHeapBytes(const std::map<K, V, C, A> &m)
 {
-  constexpr std::size_t kNodeHeader = 4 * sizeof(void *); // colour (padded) and parent, left, right links
-  return static_cast<double>(m.size()) *
-         heapBlockBytes(kNodeHeader + sizeof(typename std::map<K, V, C, A>::value_type));
+  return static_cast<double>(m.size()) * treeNodeHeapBytes<std::map<K, V, C, A>>();
 }
 
-//! Heap bytes of a std::unordered_map's bucket array and nodes (without what the values hold themselves).
-template <typename K, typename V, typename H, typename E, typename A>
-double hashNodesHeapBytes(const std::unordered_map<K, V, H, E, A> &m)
+//! Heap bytes of one node of a std::unordered_map type (without what its value holds itself).
+template <typename Map> double hashNodeHeapBytes()
 {
-  using Map = std::unordered_map<K, V, H, E, A>;
-  return heapBlockBytes(m.bucket_count() * sizeof(void *)) +
-         static_cast<double>(m.size()) * heapBlockBytes(sizeof(void *) + sizeof(typename Map::value_type));
+  return heapBlockBytes(sizeof(void *) + sizeof(typename Map::value_type));
+}
+
+//! Heap bytes of a std::unordered_map's bucket array.
+template <typename K, typename V, typename H, typename E, typename A>
+double hashBucketsHeapBytes(const std::unordered_map<K, V, H, E, A> &m)
+{
+  return heapBlockBytes(m.bucket_count() * sizeof(void *));
 }
 } // namespace hslam
 

@@ -39,10 +39,17 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
                                  " words): built with another vocabulary?");
     }
   }
+  using Index = decltype(m_index);
+  using Vectors = decltype(m_vectors);
   for (const BowEntry &e : bow) {
-    m_index[e.wordId].push_back(id);
+    const auto inserted = m_index.try_emplace(e.wordId);
+    std::vector<KeyframeId> &holders = inserted.first->second;
+    const double before = vectorHeapBytes(holders);
+    holders.push_back(id);
+    m_heapBytes += vectorHeapBytes(holders) - before + (inserted.second ? hashNodeHeapBytes<Index>() : 0.);
   }
-  m_vectors.emplace(id, bow);
+  const auto stored = m_vectors.emplace(id, bow).first;
+  m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second);
 }
 
 bool KeyframeDatabase::remove(KeyframeId id)
@@ -58,11 +65,13 @@ bool KeyframeDatabase::remove(KeyframeId id)
       continue;
     }
     std::vector<KeyframeId> &holders = word->second;
-    holders.erase(std::remove(holders.begin(), holders.end(), id), holders.end());
+    holders.erase(std::remove(holders.begin(), holders.end(), id), holders.end()); // the capacity stays
     if (holders.empty()) {
+      m_heapBytes -= vectorHeapBytes(holders) + hashNodeHeapBytes<decltype(m_index)>();
       m_index.erase(word);
     }
   }
+  m_heapBytes -= hashNodeHeapBytes<decltype(m_vectors)>() + vectorHeapBytes(it->second);
   m_vectors.erase(it);
   return true;
 }
@@ -72,6 +81,7 @@ void KeyframeDatabase::clear()
   std::unique_lock<std::shared_mutex> lock(m_mutex);
   m_index.clear();
   m_vectors.clear();
+  m_heapBytes = 0.;
 }
 
 std::size_t KeyframeDatabase::size() const
@@ -212,13 +222,6 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
 double KeyframeDatabase::memoryBytes() const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  double bytes = hashNodesHeapBytes(m_index) + hashNodesHeapBytes(m_vectors);
-  for (const auto &word : m_index) {
-    bytes += vectorHeapBytes(word.second);
-  }
-  for (const auto &keyframe : m_vectors) {
-    bytes += vectorHeapBytes(keyframe.second);
-  }
-  return bytes;
+  return m_heapBytes + hashBucketsHeapBytes(m_index) + hashBucketsHeapBytes(m_vectors);
 }
 } // namespace hslam
