@@ -30,6 +30,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <thread>
 #include <vector>
@@ -245,7 +246,12 @@ int main(int argc, char **argv)
       }
     } else {
       // The global map keeps every keyframe: growth per keyframe once the first 50 are made (window, pools and
-      // vocabulary are in place by then), against what the statistics count per marginalised keyframe.
+      // vocabulary are in place by then), against what the statistics count per marginalised keyframe. Two
+      // measures: from that sample to the end (what the issue bounds, 0.5 MB), and the sustained growth, the median
+      // of the growth per keyframe between consecutive samples. The second is the one compared with the statistics:
+      // resident memory also rises in one-off steps of a whole frame (7 MB at 640x480) when one more frame than
+      // ever before is in flight (the frame pool keeps it, up to its bound), which is not memory per keyframe
+      // (4000 frames: 0-2 such steps, moving the first measure by 0.05 MB per keyframe each).
       size_t from = rss.size() - 1;
       for (size_t i = 0; i < rss.size(); ++i) {
         if (rssKeyframes[i] >= kKeyframesBeforeGrowth) {
@@ -255,13 +261,26 @@ int main(int argc, char **argv)
       }
       const double keyframes = static_cast<double>(rssKeyframes.back()) - rssKeyframes[from];
       const double growth = keyframes > 0. ? (rss.back().second - rss[from].second) / keyframes : 0.;
+      std::vector<double> slopes;
+      for (size_t i = from + 1; i < rss.size(); ++i) {
+        const double made = static_cast<double>(rssKeyframes[i]) - rssKeyframes[i - 1];
+        if (made > 0.) {
+          slopes.push_back((rss[i].second - rss[i - 1].second) / made);
+        }
+      }
+      double sustained = std::numeric_limits<double>::quiet_NaN();
+      if (!slopes.empty()) {
+        std::nth_element(slopes.begin(), slopes.begin() + static_cast<std::ptrdiff_t>(slopes.size() / 2), slopes.end());
+        sustained = slopes[slopes.size() / 2];
+      }
       std::cout << "global map: " << s.marginalizedKeyframes << " marginalised keyframes kept (" << s.culledKeyframes
                 << " culled), " << s.globalPoints << " points; resident memory growth per keyframe after "
                 << kKeyframesBeforeGrowth << " keyframes: " << growth << " MB over " << keyframes
-                << " keyframes; statistics: " << s.mapMemoryMbPerKeyframe << " MB per marginalised keyframe"
+                << " keyframes, sustained " << sustained << " MB (median over " << slopes.size()
+                << " intervals); statistics: " << s.mapMemoryMbPerKeyframe << " MB per marginalised keyframe"
                 << std::endl;
       if (!(keyframes > 0.) || !(growth <= kMaxMbPerKeyframe) || !(s.mapMemoryMbPerKeyframe <= kMaxMbPerKeyframe) ||
-          !(std::fabs(growth - s.mapMemoryMbPerKeyframe) <= kMaxMbPerKeyframeDisagreement)) {
+          !(std::fabs(sustained - s.mapMemoryMbPerKeyframe) <= kMaxMbPerKeyframeDisagreement)) {
         std::cout << "FAIL: memory per keyframe" << std::endl;
         ok = false;
       }
