@@ -186,12 +186,12 @@ TEST(KeyframeDatabase, MemoryCountIsTheHeapItTakes)
     }
     vectors.push_back(bow);
   }
-  const std::size_t heapBefore = hslam_test::heapInUse();
+  const double heapBefore = hslam_test::heapInUse();
   KeyframeDatabase db(kWords);
   for (int k = 0; k < 60; ++k) {
     db.add(k, vectors[static_cast<std::size_t>(k)]);
   }
-  const double heap = static_cast<double>(hslam_test::heapInUse() - heapBefore);
+  const double heap = hslam_test::heapInUse() - heapBefore;
   const double counted = db.memoryBytes();
   std::printf("60 keyframes: heap %.1f KB, counted %.1f KB\n", heap / 1024., counted / 1024.);
   EXPECT_NEAR(counted, heap, 0.05 * heap);
@@ -199,7 +199,7 @@ TEST(KeyframeDatabase, MemoryCountIsTheHeapItTakes)
   for (int k = 0; k < 60; k += 3) {
     ASSERT_TRUE(db.remove(k));
   }
-  const double heapAfter = static_cast<double>(hslam_test::heapInUse() - heapBefore);
+  const double heapAfter = hslam_test::heapInUse() - heapBefore;
   std::printf("40 keyframes left: heap %.1f KB, counted %.1f KB\n", heapAfter / 1024., db.memoryBytes() / 1024.);
   EXPECT_LT(heapAfter, heap);
   EXPECT_NEAR(db.memoryBytes(), heapAfter, 0.05 * heapAfter);

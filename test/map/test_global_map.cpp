@@ -261,11 +261,11 @@ TEST(GlobalMap, MemoryCountIsTheHeapTheMapTakes)
   }
   GlobalMap map;
   const double before = map.memoryBytes();
-  const std::size_t heapBefore = hslam_test::heapInUse();
+  const double heapBefore = hslam_test::heapInUse();
   for (const GlobalKeyframe &kf : keyframes) {
     map.add(kf); // a copy: the map's own blocks
   }
-  const double heap = static_cast<double>(hslam_test::heapInUse() - heapBefore);
+  const double heap = hslam_test::heapInUse() - heapBefore;
   const double counted = map.memoryBytes() - before;
   std::printf("40 stored keyframes: heap %.1f KB, counted %.1f KB\n", heap / 1024., counted / 1024.);
   EXPECT_NEAR(counted, heap, 0.05 * heap);

@@ -219,6 +219,7 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
   }
   return result;
 }
+
 double KeyframeDatabase::memoryBytes() const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);

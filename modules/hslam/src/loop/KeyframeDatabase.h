@@ -109,8 +109,8 @@ private:
   //! vocabulary's 413,203 took 10 MB before the first keyframe).
   std::unordered_map<std::uint32_t, std::vector<KeyframeId>> m_index;
   std::unordered_map<KeyframeId, BowVector> m_vectors;
-  //! Heap bytes of the nodes and lists of m_index and m_vectors, kept up to date by add() and remove(), so that
-  //! memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5 words.
+  //! Heap bytes of the nodes and lists of m_index and m_vectors, kept up to date by add(), remove() and clear(), so
+  //! that memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5 words.
   double m_heapBytes = 0.;
 };
 } // namespace hslam

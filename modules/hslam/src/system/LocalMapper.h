@@ -107,8 +107,8 @@ public:
 
   int activePointCount() const;
   int immaturePointCount() const;
-  //! Bytes held by the window's keyframes (pyramids, images, points) plus marginalizedMemoryBytes().
-  double memoryBytes() const;
+  //! Bytes held by the window's keyframes (pyramids, images, points); with marginalizedMemoryBytes(), all the map.
+  double windowMemoryBytes() const;
   //! Bytes held for keyframes that left the window: global map (points, graph) and relocalisation index.
   double marginalizedMemoryBytes() const;
   //! Keyframes whose data is held: the window's and those stored in the global map.

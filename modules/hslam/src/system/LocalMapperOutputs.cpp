@@ -88,7 +88,7 @@ int LocalMapper::immaturePointCount() const
   return n;
 }
 
-double LocalMapper::memoryBytes() const
+double LocalMapper::windowMemoryBytes() const
 {
   double bytes = 0.;
   for (const KeyframePtr &kf : m_window) {
@@ -102,7 +102,7 @@ double LocalMapper::memoryBytes() const
     bytes +=
         static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
   }
-  return bytes + marginalizedMemoryBytes();
+  return bytes;
 }
 
 double LocalMapper::marginalizedMemoryBytes() const

@@ -189,10 +189,12 @@ void SlamSystem::publishAfterKeyframe()
   std::lock_guard<std::mutex> lock(m_snapshotMutex);
   m_snapshotPoints.swap(points);
   m_snapshotImmature = static_cast<unsigned int>(m_mapper->immaturePointCount());
-  m_snapshotMemoryMb = m_mapper->memoryBytes() / kBytesPerMegabyte;
+  // The stored map is walked once per keyframe (its points' observer lists).
+  const double marginalizedBytes = m_mapper->marginalizedMemoryBytes();
+  m_snapshotMemoryMb = (m_mapper->windowMemoryBytes() + marginalizedBytes) / kBytesPerMegabyte;
   m_snapshotKeyframesHeld = static_cast<unsigned int>(m_mapper->keyframesHeld());
   m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
-  m_snapshotMarginalizedMb = m_mapper->marginalizedMemoryBytes() / kBytesPerMegabyte;
+  m_snapshotMarginalizedMb = marginalizedBytes / kBytesPerMegabyte;
   m_snapshotReuse = m_mapper->reuseStatistics();
   m_snapshotLoopStats = m_mapper->loopStatistics();
 }

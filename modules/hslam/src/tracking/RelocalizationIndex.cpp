@@ -20,7 +20,6 @@ void RelocalizationIndex::addKeyframe(int id, const std::vector<OrbDescriptor> &
   BowVector bow;
   m_vocabulary.transform(descriptors, bow);
   m_database.add(id, bow);
-  m_bowSizes[id] = bow.size();
 }
 
 void RelocalizationIndex::setKeyframePoints(int id, std::vector<Eigen::Vector3d> wX,
@@ -81,26 +80,21 @@ void RelocalizationIndex::removeKeyframe(int id)
 {
   m_database.remove(id);
   m_points.erase(id);
-  m_bowSizes.erase(id);
 }
 
 void RelocalizationIndex::clear()
 {
   m_database.clear();
   m_points.clear();
-  m_bowSizes.clear();
 }
 
 double RelocalizationIndex::memoryBytes() const
 {
   // Every block held, allocator overhead included (common/HeapBytes.h).
-  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_bowSizes) + mapNodesHeapBytes(m_points);
+  // The stored keyframes' direct indices stay empty (index() fills the caller's copy).
+  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_points);
   for (const auto &entry : m_points) {
-    const RelocalizationKeyframe &k = entry.second;
-    bytes += vectorHeapBytes(k.wX) + vectorHeapBytes(k.descriptors) + vectorHeapBytes(k.direct);
-    for (const FeatureGroup &group : k.direct) {
-      bytes += vectorHeapBytes(group.features);
-    }
+    bytes += vectorHeapBytes(entry.second.wX) + vectorHeapBytes(entry.second.descriptors);
   }
   return bytes;
 }

@@ -57,14 +57,13 @@ public:
   void removeKeyframe(int id);
   void clear();
   std::size_t size() const { return m_database.size(); }
-  //! Bytes held on the heap (database, stored points and their direct indices), allocator overhead included.
+  //! Bytes held on the heap (database and stored points), allocator overhead included.
   double memoryBytes() const;
 
 private:
   const OrbVocabulary &m_vocabulary;
   KeyframeDatabase m_database;
   std::map<int, RelocalizationKeyframe> m_points;
-  std::map<int, std::size_t> m_bowSizes;
 };
 } // namespace hslam
 
