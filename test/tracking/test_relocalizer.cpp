@@ -1,7 +1,8 @@
 // Relocalisation on an exact synthetic scene: three places, a lost frame near one of them; the keyframe database
 // proposes that place first, BoW matching + PnP RANSAC + pose-only refinement recover the pose. A frame of pure
-// distractors is not relocalised. With most matches wrong (loose matching after a long cover), AP3P RANSAC and the
-// refinement on its consensus still find the pose.
+// distractors is not relocalised, nor kept as a near miss (a pose on too few inliers, for the caller to check). With
+// most matches wrong (loose matching after a long cover), AP3P RANSAC and the refinement on its consensus still find
+// the pose.
 #include "features/OrbVocabulary.h"
 #include "features/VocabularyTrainer.h"
 #include "loop/KeyframeDatabase.h"
@@ -126,6 +127,17 @@ TEST_F(Relocalization, RecoversThePoseOfALostFrameNearAKnownPlace)
   EXPECT_GT(result.inliers, 150);
   EXPECT_LT((result.cTw.inverse().translation() - truth.inverse().translation()).norm(), 0.01);
   EXPECT_LT((result.cTw.inverse() * truth).log().tail<3>().norm() * 180. / M_PI, 0.2);
+  EXPECT_EQ(result.nearMissKeyframeId, -1); // a success leaves no near miss
+
+  // Asked for more inliers than the place can give: no success, but the pose it found stays as the near miss, for a
+  // caller to check against more of the map.
+  hslam::RelocalizerOptions strict;
+  strict.minInliers = 1000;
+  const hslam::RelocalizationResult missed = hslam::relocalize(frame, candidates, kK, strict);
+  EXPECT_FALSE(missed.success);
+  ASSERT_EQ(missed.nearMissKeyframeId, 101);
+  EXPECT_EQ(missed.nearMissInliers, result.inliers);
+  EXPECT_LT((missed.nearMissCTw.inverse().translation() - truth.inverse().translation()).norm(), 0.01);
 }
 
 TEST_F(Relocalization, AFrameOfDistractorsIsNotRelocalised)
@@ -139,6 +151,7 @@ TEST_F(Relocalization, AFrameOfDistractorsIsNotRelocalised)
   const hslam::RelocalizationResult result = hslam::relocalize(frame, all, kK);
   EXPECT_FALSE(result.success);
   EXPECT_EQ(result.candidatesTried, 3);
+  EXPECT_EQ(result.nearMissKeyframeId, -1) << result.nearMissInliers << " inliers among distractors";
 }
 TEST_F(Relocalization, FindsThePoseWhenMostMatchesAreWrong)
 {

@@ -107,6 +107,12 @@ private:
     located frame or when the alignment fails.
   */
   bool refineInLoadedMap(const FramePtr &frame, const SE3d &wMlast, const GeometricTerm *matches, SE3d &cMw);
+  /*!
+    Localisation-only: whether the points around the keyframe of \e r's near miss (a PnP pose on too few inliers),
+    matched by projection from that pose, place the frame with tracking.relocalizationMinInliers inliers; then
+    \e cMw and \e inliers are theirs.
+  */
+  bool confirmInLoadedMap(const RelocalizationResult &r, SE3d &cMw, int &inliers);
   //! The rectified camera, as map files record it.
   MapCamera mapCamera() const;
   //! Throws when the mode keeps no global map (vo-strict): \e operation names the call in the message.

@@ -202,6 +202,7 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     result.inliers = std::max(result.inliers, refined.inliers);
     if (refined.inliers >= options.minInliers) {
       result.success = true;
+      result.nearMissKeyframeId = -1;
       result.keyframeId = keyframe->id;
       result.cTw = refined.cTw;
       result.matches = static_cast<int>(matches.size());
@@ -212,6 +213,12 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
         }
       }
       return result;
+    }
+    if (refined.inliers >= options.minMatches && refined.inliers > result.nearMissInliers &&
+        refined.cTw.translation().allFinite()) {
+      result.nearMissKeyframeId = keyframe->id;
+      result.nearMissCTw = refined.cTw;
+      result.nearMissInliers = refined.inliers;
     }
   }
   return result;

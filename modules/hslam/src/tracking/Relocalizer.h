@@ -76,6 +76,14 @@ struct RelocalizationResult {
   int inliers = 0;     //!< after refinement (on failure: the most with any candidate)
   int candidatesTried = 0;
   std::vector<ReprojectionObservation> inlierObservations; //!< the matches the pose was refined on (on success)
+  /*!
+    On failure, the refined pose with the most inliers that still fell short of minInliers (at least minMatches of
+    them): a pose a caller may check against more of the map than the candidate's points (ORB-SLAM2 searches the
+    keyframe's points by projection before giving up). -1 when no candidate got that far.
+  */
+  int nearMissKeyframeId = -1;
+  SE3d nearMissCTw;        //!< that pose (valid when nearMissKeyframeId >= 0)
+  int nearMissInliers = 0; //!< its inliers
 };
 
 //! BoW-restricted matching (ORB-SLAM2 SearchByBoW): pairs (keyframe point, frame keypoint).
