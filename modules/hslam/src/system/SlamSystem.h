@@ -109,8 +109,9 @@ private:
   bool refineInLoadedMap(const FramePtr &frame, const SE3d &wMlast, const GeometricTerm *matches, SE3d &cMw);
   /*!
     Localisation-only: whether the points around the keyframe of \e r's near miss (a PnP pose on too few inliers),
-    matched by projection from that pose, place the frame with tracking.relocalizationMinInliers inliers; then
-    \e cMw and \e inliers are theirs.
+    matched by projection from that pose, place the frame with twice tracking.relocalizationMinInliers inliers,
+    within a frame's motion of that pose and without the search's prediction-free recovery; then \e cMw and
+    \e inliers are theirs. The local map gathered for that keyframe replaces the one held (m_localMapFeatures).
   */
   bool confirmInLoadedMap(const RelocalizationResult &r, SE3d &cMw, int &inliers);
   //! The rectified camera, as map files record it.

@@ -203,6 +203,8 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     if (refined.inliers >= options.minInliers) {
       result.success = true;
       result.nearMissKeyframeId = -1;
+      result.nearMissCTw = SE3d();
+      result.nearMissInliers = 0;
       result.keyframeId = keyframe->id;
       result.cTw = refined.cTw;
       result.matches = static_cast<int>(matches.size());

@@ -48,7 +48,7 @@ struct RelocalizationFrame {
 struct RelocalizerOptions {
   int maxDistance = 50;       //!< Hamming distance accepted at most in the BoW search (ORB-SLAM2 TH_LOW)
   float ratio = 0.75f;        //!< best below ratio x second best (ORB-SLAM2: 0.75 in relocalisation)
-  int minMatches = 15;        //!< BoW matches needed to try PnP with a keyframe
+  int minMatches = 15;        //!< BoW matches needed to try PnP with a keyframe, and inliers of a near miss
   int ransacIterations = 300; //!< PnP RANSAC iterations
   bool minimalP3P = false;    //!< AP3P hypotheses from 4 matches instead of EPnP's 5 (for low inlier ratios)
   //! Refine on the RANSAC consensus first, then on the matches that agree with that pose (for mostly wrong matches;
@@ -82,8 +82,8 @@ struct RelocalizationResult {
     keyframe's points by projection before giving up). -1 when no candidate got that far.
   */
   int nearMissKeyframeId = -1;
-  SE3d nearMissCTw;        //!< that pose (valid when nearMissKeyframeId >= 0)
-  int nearMissInliers = 0; //!< its inliers
+  SE3d nearMissCTw;        //!< that pose (identity unless nearMissKeyframeId >= 0)
+  int nearMissInliers = 0; //!< its inliers (0 unless nearMissKeyframeId >= 0)
 };
 
 //! BoW-restricted matching (ORB-SLAM2 SearchByBoW): pairs (keyframe point, frame keypoint).
