@@ -15,9 +15,6 @@
 
 #include <visp3/hslam/vpHSlamLog.h>
 
-#include <algorithm>
-#include <vector>
-
 namespace hslam
 {
 vpHSlam::State SlamSystem::localizeInLoadedMap(const FramePtr &frame)
@@ -123,17 +120,9 @@ bool SlamSystem::confirmInLoadedMap(const RelocalizationResult &r, SE3d &cMw, in
   }
   IndirectStepResult step;
   const bool found = m_hybrid->indirectStep(m_localMapFeatures, r.nearMissCTw, step) && !step.recovered;
-  std::vector<double> depths;
-  for (const Eigen::Vector3d &wX : step.term.Xref) { // the world is the reference here
-    depths.push_back((step.newMref * wX).z());
-  }
-  double medianDepth = 0.;
-  if (!depths.empty()) {
-    const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
-    std::nth_element(depths.begin(), middle, depths.end());
-    medianDepth = *middle;
-  }
-  const FixAgreement agreement = compareFixes(r.nearMissCTw, step.newMref, medianDepth);
+  // The world is the reference here: the matched points are world points, newMref is cMw.
+  const FixAgreement agreement =
+      found ? compareFixes(r.nearMissCTw, step.newMref, medianDepth(step.newMref, step.term.Xref)) : FixAgreement();
   const int needed = 2 * m_params.tracking.relocalizationMinInliers;
   const bool confirmed = found && step.inliers >= needed && agreement.agrees;
   VP_HSLAM_LOG(vpHSlamLog::debug, "near miss on keyframe "

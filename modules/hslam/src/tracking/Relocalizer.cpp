@@ -120,6 +120,7 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
                                 const PinholeIntrinsics &K, const RelocalizerOptions &options)
 {
   RelocalizationResult result;
+  RelocalizationResult nearMiss; // only its near-miss fields: reported on failure
   const cv::Mat cameraMatrix = (cv::Mat_<double>(3, 3) << K.fx, 0., K.cx, 0., K.fy, K.cy, 0., 0., 1.);
   for (const RelocalizationKeyframe *keyframe : candidates) {
     if (!keyframe) {
@@ -202,9 +203,6 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     result.inliers = std::max(result.inliers, refined.inliers);
     if (refined.inliers >= options.minInliers) {
       result.success = true;
-      result.nearMissKeyframeId = -1;
-      result.nearMissCTw = SE3d();
-      result.nearMissInliers = 0;
       result.keyframeId = keyframe->id;
       result.cTw = refined.cTw;
       result.matches = static_cast<int>(matches.size());
@@ -216,21 +214,24 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
       }
       return result;
     }
-    if (refined.inliers >= options.minMatches && refined.inliers > result.nearMissInliers &&
+    if (refined.inliers >= options.minMatches && refined.inliers > nearMiss.nearMissInliers &&
         refined.cTw.translation().allFinite()) {
-      result.nearMissKeyframeId = keyframe->id;
-      result.nearMissCTw = refined.cTw;
-      result.nearMissInliers = refined.inliers;
+      nearMiss.nearMissKeyframeId = keyframe->id;
+      nearMiss.nearMissCTw = refined.cTw;
+      nearMiss.nearMissInliers = refined.inliers;
     }
   }
+  result.nearMissKeyframeId = nearMiss.nearMissKeyframeId; // failed: the best pose that fell short, if any
+  result.nearMissCTw = nearMiss.nearMissCTw;
+  result.nearMissInliers = nearMiss.nearMissInliers;
   return result;
 }
-double medianInlierDepth(const RelocalizationResult &r)
+double medianDepth(const SE3d &cTw, const std::vector<Eigen::Vector3d> &wX)
 {
   std::vector<double> depths;
-  depths.reserve(r.inlierObservations.size());
-  for (const ReprojectionObservation &o : r.inlierObservations) {
-    depths.push_back((r.cTw * o.wX).z());
+  depths.reserve(wX.size());
+  for (const Eigen::Vector3d &X : wX) {
+    depths.push_back((cTw * X).z());
   }
   if (depths.empty()) {
     return 0.;
@@ -238,6 +239,16 @@ double medianInlierDepth(const RelocalizationResult &r)
   const auto middle = depths.begin() + static_cast<std::ptrdiff_t>(depths.size() / 2);
   std::nth_element(depths.begin(), middle, depths.end());
   return *middle;
+}
+
+double medianInlierDepth(const RelocalizationResult &r)
+{
+  std::vector<Eigen::Vector3d> wX;
+  wX.reserve(r.inlierObservations.size());
+  for (const ReprojectionObservation &o : r.inlierObservations) {
+    wX.push_back(o.wX);
+  }
+  return medianDepth(r.cTw, wX);
 }
 
 FixAgreement compareFixes(const SE3d &previousCMw, const SE3d &currentCMw, double medianDepth)

@@ -94,6 +94,8 @@ matchByBow(const RelocalizationKeyframe &keyframe, const RelocalizationFrame &fr
 VISP_EXPORT std::vector<std::pair<int, int>> matchExhaustive(const RelocalizationKeyframe &keyframe,
                                                              const RelocalizationFrame &frame,
                                                              const RelocalizerOptions &options);
+//! Median depth of the points \e wX in the camera \e cTw (0 without points), map units.
+VISP_EXPORT double medianDepth(const SE3d &cTw, const std::vector<Eigen::Vector3d> &wX);
 //! Median depth of \e r's inlier points in the frame it placed (0 when it has none), map units.
 VISP_EXPORT double medianInlierDepth(const RelocalizationResult &r);
 
