@@ -186,6 +186,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(loop, minInliers, atLeast(3), "Sim(3) inliers needed to accept a loop"),
   HSLAM_PARAM(loop, ransacThresholdPx, positive(), "Sim(3) inlier reprojection error, pixels"),
   HSLAM_PARAM(loop, maxRotationCorrectionDeg, between(0., 180.), "loops rotating the map more are refused, deg"),
+  HSLAM_PARAM(loop, featuresPerKeyframe, atLeast(0), "ORB keypoints per stored keyframe for loops (0 = off)"),
   HSLAM_PARAM(loop, globalBundleAdjustment, anyValue(), "refine stored poses and depths after a loop correction"),
   HSLAM_PARAM(loop, globalBaIterations, atLeast(1), "iterations of the global bundle adjustment"),
   HSLAM_PARAM(loop, globalBaHuberPx, positive(), "Huber threshold of the global bundle adjustment, pixels"),

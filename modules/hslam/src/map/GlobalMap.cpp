@@ -212,4 +212,18 @@ double GlobalMap::memoryBytes() const
   }
   return bytes + vectorHeapBytes(m_posePose);
 }
+bool GlobalMap::applySimilarity(int id, const Sim3d &Siw)
+{
+  GlobalKeyframe *g = find(id);
+  if (!g) {
+    return false;
+  }
+  const double s = Siw.scale();
+  g->cMw = SE3d(Siw.unitQuaternion(), Siw.translation() / s);
+  for (GlobalPoint &p : g->points) {
+    p.idepth = static_cast<float>(p.idepth * s);
+    p.idepthVar = static_cast<float>(p.idepthVar * s * s);
+  }
+  return true;
+}
 } // namespace hslam

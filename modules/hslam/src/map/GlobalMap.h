@@ -33,6 +33,7 @@
 #include "features/BinaryDescriptor.h"
 #include "map/AffineBrightness.h"
 #include "math/SE3.h"
+#include "math/Sim3.h"
 
 #include <visp3/core/vpConfig.h>
 
@@ -159,6 +160,11 @@ public:
   */
   void addObservation(int keyframeId, size_t pointIndex, int observerId, float u, float v);
 
+  /*!
+    A loop correction moved stored keyframe \e id to the similarity \e Siw: its pose becomes the rigid part and its
+    points follow their host (inverse depths multiplied by the scale: X_camera' = X_camera / s). False when absent.
+  */
+  bool applySimilarity(int id, const Sim3d &Siw);
   GlobalKeyframe *find(int id);
   const GlobalKeyframe *find(int id) const;
   const std::map<int, GlobalKeyframe> &keyframes() const { return m_keyframes; }

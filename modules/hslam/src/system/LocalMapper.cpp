@@ -17,7 +17,10 @@
 
 #include <visp3/hslam/vpHSlamLog.h>
 
+#include <visp3/hslam/vpHSlamException.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -83,6 +86,9 @@ LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsic
     : m_impl(new Impl(params, K0, width, height, photometricCalibration, vocabulary)),
       m_photometricCalibration(photometricCalibration), m_globalMap(globalMapOptions(params))
 {
+  if (vocabulary && params.system.mode == vpHSlamParameters::modeSlam) {
+    m_loop = std::make_unique<LoopCloser>(params.loop, K0, *vocabulary);
+  }
 }
 
 LocalMapper::~LocalMapper() = default;
@@ -95,6 +101,9 @@ void LocalMapper::clear()
   m_impl.swap(fresh);
   m_window.clear();
   m_initializationFailed = false;
+  if (m_loop) {
+    m_loop->clear(); // loops stay within a segment: the old one's features are of no further use
+  }
   ++m_segment; // the global map keeps what the old segment stored; re-use stays within a segment
 }
 
@@ -275,9 +284,7 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId, int seedKe
     }
     m.relocalization->addKeyframe(keyframeId, descriptors);
   }
-  if (m.params.system.mode == vpHSlamParameters::modeSlam) {
-    detectLoop(*kf);
-  }
+  closeLoops();
   VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << keyframeId << " timing: trace " << t1 - t0 << " ms, activation "
                                               << t2 - t1 << " ms, rest " << threadCpuMs() - t2 << " ms");
 }
@@ -561,8 +568,118 @@ void LocalMapper::marginalize(int keyframeId)
   state.activePoints = 0;
   m.marginalizedStates.push_back(state);
   if (keepsGlobalMap()) {
+    handOverToLoopCloser(**it);    // before storing: a keyframe culled at once leaves the loop closer too
     storeInGlobalMap(**it, pairs); // after setKeyframePoints: a culled keyframe then leaves the index whole
   }
   m_window.erase(it);
+}
+
+// ------------------------------------------------------------------------------------------------ loop closure
+
+void LocalMapper::handOverToLoopCloser(const Keyframe &kf)
+{
+  if (!m_loop) {
+    return;
+  }
+  // Depth samples: the keyframe's own points (final now) and the window's active points seen from it.
+  const PinholeIntrinsics &K = m_impl->K0;
+  std::vector<IdepthSample> samples;
+  for (const KeyframePtr &host : m_window) {
+    const bool own = host.get() == &kf;
+    const SE3d kMh = kf.frame->cMw * host->frame->cMw.inverse();
+    for (const MapPoint &p : host->points) {
+      const bool usable = p.status == PointStatus::active || (own && p.status == PointStatus::marginalized);
+      if (!usable || !(p.idepth > 0.) || p.depthFromPrior) {
+        continue;
+      }
+      const Eigen::Vector3d X = own ? K.unproject(p.u, p.v, p.idepth) : kMh * K.unproject(p.u, p.v, p.idepth);
+      if (X.z() > 0.) {
+        samples.push_back({K.fx * X.x() / X.z() + K.cx, K.fy * X.y() / X.z() + K.cy, 1. / X.z()});
+      }
+    }
+  }
+  m_loop->addKeyframe(kf.id(), m_segment, kf.frame->raw, samples);
+}
+
+std::set<int> LocalMapper::connectedToWindow() const
+{
+  // Not the window's co-visible keyframes: the query is a stored keyframe now, and a keyframe DSO keeps in the window
+  // for long (it still sees most of its points) is co-visible with a whole pass; with them, every keyframe of the
+  // outward pass was excluded on 7-Scenes played there and back. The query's own co-visible ones are excluded by
+  // the loop closer.
+  std::set<int> connected;
+  for (const KeyframePtr &kf : m_window) {
+    connected.insert(kf->id());
+    // Keyframes whose points the window re-uses now are connected (their co-visibility is only counted once those
+    // points leave the window again): re-use has already joined them to the present, no loop is needed there.
+    for (const MapPoint &pt : kf->points) {
+      if (pt.status == PointStatus::active && pt.fromGlobalMap) {
+        connected.insert(pt.observers.begin(), pt.observers.end());
+      }
+    }
+  }
+  return connected;
+}
+
+void LocalMapper::closeLoops()
+{
+  DetectedLoop loop;
+  if (m_loop && m_loop->detect(m_globalMap, connectedToWindow(), loop)) {
+    correctLoop(loop);
+  }
+}
+
+bool LocalMapper::correctLoop(const DetectedLoop &loop)
+{
+  Impl &m = *m_impl;
+  struct Flag {
+    std::atomic<bool> &flag;
+    ~Flag() { flag = false; }
+  } correcting{m_correctingLoop};
+  m_correctingLoop = true;
+  // A global bundle adjustment of an earlier loop: written back if it has ended; else it goes on (it works on its own
+  // copy) until this correction is known to succeed, and is stopped only then (its keyframes move; a new one follows).
+  collectGlobalBundleAdjustment(false);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::map<int, SE3d> windowPoses;
+  for (const KeyframePtr &kf : m_window) {
+    windowPoses[kf->id()] = kf->frame->cMw;
+  }
+  std::vector<std::pair<int, Sim3d>> solution;
+  bool solved = false;
+  try {
+    solved = m_loop->correct(loop, m_globalMap, windowPoses, solution);
+  } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
+    VP_HSLAM_LOG(vpHSlamLog::warning,
+                 "loop " << loop.keyframe << "-" << loop.candidate << " not corrected: " << e.getStringMessage());
+  }
+  if (!solved) {
+    VP_HSLAM_LOG(vpHSlamLog::warning, "loop " << loop.keyframe << "-" << loop.candidate << " not corrected");
+    return false;
+  }
+  m.globalBa.cancel(); // its result would undo this correction
+  for (const auto &entry : solution) {
+    m_globalMap.applySimilarity(entry.first, entry.second);
+    m_loop->rescale(entry.first, entry.second.scale());
+    publishStoredKeyframe(entry.first, entry.second.scale());
+  }
+  LoopStatistics &stats = m_loop->statistics();
+  stats.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  stats.correctionMsMax = std::max(stats.correctionMsMax, stats.lastCorrectionMs);
+  VP_HSLAM_LOG(vpHSlamLog::info, "loop " << loop.keyframe << "-" << loop.candidate << " corrected, " << solution.size()
+                                         << " stored keyframes moved, " << stats.lastCorrectionMs << " ms");
+  startGlobalBundleAdjustment();
+  return true;
+}
+
+const LocalMapper::LoopStatistics &LocalMapper::loopStatistics() const
+{
+  static const LoopStatistics none;
+  return m_loop ? m_loop->statistics() : none;
+}
+
+double LocalMapper::loopMemoryBytes() const
+{
+  return m_loop ? m_loop->memoryBytes() : 0.;
 }
 } // namespace hslam

@@ -24,6 +24,7 @@
 #define HSLAM_SYSTEM_LOCAL_MAPPER_H
 
 #include "features/ImagePyramid.h"
+#include "loop/LoopCloser.h"
 #include "map/Frame.h"
 #include "map/GlobalMap.h"
 #include "map/Keyframe.h"
@@ -35,6 +36,7 @@
 
 #include <atomic>
 #include <memory>
+#include <set>
 #include <vector>
 
 namespace hslam
@@ -50,9 +52,7 @@ struct RelocalizationKeyframe;
 struct RelocalizationFrame;
 struct WindowView;
 struct PairInformation;
-struct Sim3Estimate;
 struct GlobalBundleJob;
-struct LoopPointMatch;
 
 class VISP_EXPORT LocalMapper
 {
@@ -153,34 +153,15 @@ public:
   //! The same rule for a mode, before any mapper exists (the system decides from it what to load).
   static bool keepsGlobalMap(vpHSlamParameters::Mode mode) { return mode != vpHSlamParameters::modeVoStrict; }
   const GlobalMap &globalMap() const { return m_globalMap; }
-  // ---- loops (system.mode slam)
-  //! A verified loop.
-  struct LoopRecord {
-    int keyframe = -1;            //!< the new keyframe that closed it
-    int candidate = -1;           //!< the stored keyframe it closed with
-    int inliers = 0;              //!< Sim(3) inliers
-    double scale = 1.;            //!< scale of the measured S_keyframe_candidate
-    double translationDrift = 0.; //!< |translation part of the correction| (map units)
-  };
-  struct LoopStatistics {
-    int candidatesVerified = 0;      //!< consistent candidates given to the Sim(3) verification
-    std::vector<LoopRecord> loops;   //!< loops accepted
-    int corrected = 0;               //!< loops whose pose-graph correction was applied
-    int refusedImplausible = 0;      //!< verified loops refused for a rotation correction above the limit
-    double lastCorrectionMs = 0.;    //!< wall time of the last correction (graph, optimisation, map update)
-    double correctionMsMax = 0.;     //!< longest correction
-    int detections = 0;              //!< keyframes checked for a loop (database queried)
-    double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
-    double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
-    int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
-    int globalBaApplied = 0;         //!< ... and written back
-    double globalBaSecondsMax = 0.;  //!< longest of them, wall time, seconds
-    double globalBaRmsBeforePx = 0.; //!< reprojection RMS of the last one applied, before and after, pixels
-    double globalBaRmsAfterPx = 0.;
-  };
+  // ---- loops (system.mode slam; loop/LoopCloser.h does the work)
+  using LoopRecord = hslam::LoopRecord;
+  using LoopStatistics = hslam::LoopStatistics;
   //! True while a loop correction runs (read by the tracking thread: tracking must not wait for it).
   bool correctingLoop() const { return m_correctingLoop.load(); }
-  const LoopStatistics &loopStatistics() const { return m_loops; }
+  //! Loop counters since the start (or the last reset()); all zero without a loop closer.
+  const LoopStatistics &loopStatistics() const;
+  //! Bytes the loop closer holds (loop features and their database), counted in marginalizedMemoryBytes().
+  double loopMemoryBytes() const;
   /*!
     Real time: write back a background global bundle adjustment that has ended (or wait for the running one when
     \e wait); true when one was collected (its keyframes' states are then to be taken).
@@ -280,25 +261,18 @@ private:
   int dropAnchorOutliers();
   //! A stored keyframe, its co-visible keyframes and its neighbours in time that the global map holds (not culled).
   std::vector<int> storedNeighbourhood(int id) const;
-  //! Loop detection and verification for the newest keyframe (slam mode); true when a loop was accepted.
-  bool detectLoop(const Keyframe &newest);
-  //! ORB matches between the window's points and the candidate's side, then the Sim(3) RANSAC.
-  //! \e inliers: the matches the accepted Sim(3) explains (empty when rejected).
-  Sim3Estimate verifyLoop(const Keyframe &newest, int candidate, int &matchCount,
-                          std::vector<LoopPointMatch> &inliers) const;
+  //! Hand a keyframe leaving the window to the loop closer: its image and the window's inverse depths in it.
+  void handOverToLoopCloser(const Keyframe &kf);
+  //! Keyframes connected to the present: the window and the keyframes of the points it re-uses.
+  std::set<int> connectedToWindow() const;
+  //! Loop detection for the keyframes handed over (slam mode), and the correction of an accepted loop.
+  void closeLoops();
   /*!
-    Loop fusion for the global bundle adjustment: each verified match makes the keyframe that closed the loop an
-    observer of the stored point (at the window point's pixel) and the candidate an observer of the window point (at
-    the stored point's pixel, carried until it leaves the window): measurements across the loop.
+    Correct the stored keyframes of the segment after \e loop: the loop closer's pose graph (window fixed), then
+    every stored keyframe's pose and its points' inverse depths (the map follows its host), its loop features, the
+    relocalisation index and the reported trajectory. Returns false when the optimisation failed (nothing changed).
   */
-  void fuseLoopMatches(int newestId, int candidate, const std::vector<LoopPointMatch> &inliers);
-  /*!
-    Correct the stored keyframes of the segment after a loop: Sim(3) pose graph (window keyframes fixed; pose-pose,
-    strong co-visibility and every loop edge so far), then every stored keyframe's pose and its points' inverse depths
-    (the map follows its host), the relocalisation index and the reported trajectory. Returns false when the
-    optimisation failed (nothing changed).
-  */
-  bool correctLoop(const Keyframe &newest, int candidate);
+  bool correctLoop(const DetectedLoop &loop);
   //! A stored keyframe moved: report its pose (and the scale of the move) and refresh its relocalisation points.
   void publishStoredKeyframe(int id, double scale);
   //! After a correction: the global bundle adjustment (loop.globalBundleAdjustment), in order when deterministic,
@@ -316,12 +290,8 @@ private:
   GlobalMap m_globalMap; //!< outlives segments (clear() keeps it)
   int m_segment = 0;     //!< segment of the keyframes being made
   ReuseStatistics m_reuse;
-  LoopStatistics m_loops;
-  struct LoopEdge {
-    int candidate = -1, keyframe = -1;
-    Sim3d SkeyframeCandidate; //!< measured by the Sim(3) verification
-  };
-  std::vector<LoopEdge> m_loopEdges; //!< every accepted loop, kept for the next corrections
+  //! Loop closure (slam mode with a vocabulary); outlives segments like the global map (clear() starts a segment).
+  std::unique_ptr<LoopCloser> m_loop;
   std::atomic<bool> m_correctingLoop{false};
 };
 } // namespace hslam

@@ -10,6 +10,8 @@
 #include "map/GlobalPointReuse.h"
 #include "mapping/AnchorResidual.h"
 #include "mapping/PointActivation.h"
+#include "tracking/RelocalizationIndex.h"
+#include "tracking/Relocalizer.h"
 
 #include <visp3/hslam/vpHSlamLog.h>
 
@@ -265,8 +267,13 @@ void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInf
     m_globalMap.addPosePoseEdge(e);
   }
   const int id = kf.id();
-  if (m_globalMap.add(leanKeyframe(kf, false)) && m_impl->relocalization) {
-    m_impl->relocalization->removeKeyframe(id);
+  if (m_globalMap.add(leanKeyframe(kf, false))) { // culled at once
+    if (m_impl->relocalization) {
+      m_impl->relocalization->removeKeyframe(id);
+    }
+    if (m_loop) {
+      m_loop->removeKeyframe(id);
+    }
   }
 }
 
@@ -451,5 +458,88 @@ void LocalMapper::mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vect
       }
     }
   }
+}
+// ------------------------------------------------------------------------------ after a loop correction
+
+void LocalMapper::publishStoredKeyframe(int id, double scale)
+{
+  Impl &m = *m_impl;
+  const GlobalKeyframe *g = m_globalMap.find(id);
+  KeyframeState state;
+  state.id = id;
+  state.wMc = g->cMw.inverse();
+  state.inWindow = false;
+  state.scale = scale;
+  m.marginalizedStates.push_back(state);
+  RelocalizationKeyframe points;
+  if (!m.relocalization || !m.relocalization->keyframePoints(id, points)) {
+    return;
+  }
+  points.wX.clear();
+  points.descriptors.clear();
+  for (const GlobalPoint &p : g->points) {
+    if (p.hasOrb && p.isCorner && p.idepth > 0.f) {
+      points.wX.push_back(state.wMc * m.K0.unproject(p.u, p.v, p.idepth));
+      points.descriptors.push_back(p.orb);
+    }
+  }
+  m.relocalization->setKeyframePoints(id, std::move(points.wX), std::move(points.descriptors));
+}
+
+void LocalMapper::startGlobalBundleAdjustment()
+{
+  Impl &m = *m_impl;
+  const vpHSlamParameters::Loop &p = m.params.loop;
+  if (!p.globalBundleAdjustment || !m_loop) {
+    return;
+  }
+  std::map<int, SE3d> windowPoses;
+  for (const KeyframePtr &kf : m_window) {
+    windowPoses[kf->id()] = kf->frame->cMw;
+  }
+  GlobalBundleOptions options;
+  options.maxIterations = p.globalBaIterations;
+  options.huberPx = p.globalBaHuberPx;
+  std::unique_ptr<GlobalBundleJob> job =
+      makeGlobalBundleJob(m_globalMap, m_segment, windowPoses, m.K0, options, p.globalBaPointsPerKeyframe);
+  ++m_loop->statistics().globalBaStarted;
+  if (m.params.system.deterministic) {
+    job->run(); // in order, inside track(): the same output run to run
+    finishGlobalBundleAdjustment(*job);
+  } else {
+    m.globalBa.start(std::move(job)); // a job of an earlier loop still running is cancelled
+  }
+}
+
+bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
+{
+  Impl &m = *m_impl;
+  if (!m.globalBa.running() || (!wait && !m.globalBa.finished())) {
+    return false;
+  }
+  std::unique_ptr<GlobalBundleJob> job = m.globalBa.take();
+  finishGlobalBundleAdjustment(*job);
+  return true;
+}
+
+void LocalMapper::finishGlobalBundleAdjustment(const GlobalBundleJob &job)
+{
+  const GlobalBundleSummary &s = job.summary;
+  LoopStatistics &stats = m_loop->statistics();
+  stats.globalBaSecondsMax = std::max(stats.globalBaSecondsMax, s.seconds);
+  const std::vector<int> moved = applyGlobalBundleJob(job, m_globalMap);
+  for (int id : moved) {
+    publishStoredKeyframe(id, 1.);
+  }
+  if (!moved.empty()) {
+    ++stats.globalBaApplied;
+    stats.globalBaRmsBeforePx = s.rmsBeforePx;
+    stats.globalBaRmsAfterPx = s.rmsAfterPx;
+  }
+  VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment "
+                                     << (moved.empty() ? "failed" : "applied") << ": " << s.keyframes << " keyframes ("
+                                     << moved.size() << " moved), " << s.points << " points, " << s.observations
+                                     << " observations, " << s.iterations << " iterations, reprojection RMS "
+                                     << s.rmsBeforePx << " -> " << s.rmsAfterPx << " px, " << s.seconds << " s");
 }
 } // namespace hslam

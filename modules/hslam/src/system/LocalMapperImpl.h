@@ -10,7 +10,6 @@
 
 #include "features/SharedPointSelector.h"
 #include "loop/GlobalBundleJob.h"
-#include "loop/LoopDetector.h"
 #include "mapping/ImmaturePointTracer.h"
 #include "mapping/PointActivation.h"
 #include "mapping/WindowOptimizer.h"
@@ -33,7 +32,7 @@ struct LocalMapper::Impl {
       : params(p), K0(K), width(w), height(h), tracer(p.mapper, p.tracker), activation(p.mapper),
         selector(p.features, p.tracking.mode != vpHSlamParameters::trackingDirect ||
                                  p.system.mode != vpHSlamParameters::modeVoStrict),
-        optimizer(p), loopConsistency(p.loop.consistency)
+        optimizer(p)
   {
     optimizer.setPhotometricallyCalibrated(calibrated);
     vocabulary = voc;
@@ -85,8 +84,6 @@ struct LocalMapper::Impl {
   //! more (see LocalMapper::noteRelocalization()).
   bool relocalizedInSegment = false;
   double initNoiseSigma = 0.; //!< image noise of the segment's first keyframe (estimateNoiseSigma), intensity units
-  LoopConsistency loopConsistency;                          //!< candidate groups of the last loop queries
-  int keyframeOfLastLoop = 0;                               //!< keyframesInSegment when the last loop was accepted
   std::map<int, std::vector<PairInformation>> pendingPairs; //!< pose-pose links of the keyframes being marginalised
   //! Real time: the global bundle adjustment's thread (cancelled with this state: clear(), reset(), destruction).
   BackgroundBundleAdjustment globalBa;

@@ -88,8 +88,9 @@ void LocalMapper::reset()
   clear();
   m_globalMap.clear();
   m_reuse = ReuseStatistics();
-  m_loops = LoopStatistics();
-  m_loopEdges.clear();
+  if (m_loop) {
+    m_loop->statistics() = LoopStatistics();
+  }
   m_segment = 0;
 }
 } // namespace hslam

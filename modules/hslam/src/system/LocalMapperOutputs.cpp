@@ -107,7 +107,7 @@ double LocalMapper::windowMemoryBytes() const
 
 double LocalMapper::marginalizedMemoryBytes() const
 {
-  double bytes = m_globalMap.memoryBytes();
+  double bytes = m_globalMap.memoryBytes() + loopMemoryBytes();
   if (m_impl->relocalization) {
     bytes += m_impl->relocalization->memoryBytes();
   }

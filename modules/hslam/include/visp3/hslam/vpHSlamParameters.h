@@ -213,6 +213,9 @@ public:
     int minInliers = 20;                   //!< Sim(3) inliers needed to accept a loop (ORB-SLAM RANSAC: 20)
     double ransacThresholdPx = 3.035;      //!< Sim(3) inlier reprojection error in both images, pixels (sqrt 9.21)
     double maxRotationCorrectionDeg = 30.; //!< a loop rotating the map more than this is refused (aliasing)
+    //! ORB keypoints detected in each keyframe that leaves the window, for place recognition and verification (only
+    //! those given a depth by the window are kept; loop/LoopFeatures.h). 0: no loop closure.
+    int featuresPerKeyframe = 500;
     //! After a loop's pose graph, refine stored poses and depths (background). Off by default: its measurements are
     //! the window's own projections at marginalisation, so it adds little the pose graph has not used and partly
     //! undoes the correction (measured: README, "Global map and loop closure").

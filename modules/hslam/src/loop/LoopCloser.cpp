@@ -1,0 +1,280 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "loop/LoopCloser.h"
+
+#include "common/HeapBytes.h"
+#include "features/OrbVocabulary.h"
+#include "loop/LoopCorrection.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamLog.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+namespace hslam
+{
+namespace
+{
+//! Co-visible keyframes that widen the querying keyframe's side of a verification (its own view counts most).
+constexpr size_t kQueryNeighbours = 2;
+//! ... and the candidate's side (ORB-SLAM: the candidate's connected keyframes).
+constexpr size_t kCandidateNeighbours = 4;
+
+double msSince(std::chrono::steady_clock::time_point t0)
+{
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+LoopFeatureOptions featureOptions(const vpHSlamParameters::Loop &p)
+{
+  LoopFeatureOptions o;
+  o.maxFeatures = p.featuresPerKeyframe;
+  return o;
+}
+} // namespace
+
+LoopCloser::LoopCloser(const vpHSlamParameters::Loop &params, const PinholeIntrinsics &K,
+                       const OrbVocabulary &vocabulary)
+    : m_params(params), m_K(K), m_vocabulary(vocabulary), m_extractor(featureOptions(params)),
+      m_database(vocabulary.wordCount()), m_consistency(params.consistency)
+{
+}
+
+void LoopCloser::addKeyframe(int id, int segment, const vpImage<unsigned char> &image,
+                             const std::vector<IdepthSample> &samples)
+{
+  if (m_params.featuresPerKeyframe <= 0 || m_keyframes.count(id)) {
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<OrbDescriptor> descriptors;
+  Entry entry;
+  entry.features = m_extractor.extract(id, image, samples, m_K, descriptors);
+  entry.segment = segment;
+  BowVector bow;
+  m_vocabulary.transform(descriptors, bow);
+  m_database.add(id, bow);
+  m_keyframes.emplace(id, std::move(entry));
+  if (segment != m_segment) {
+    m_segment = segment;
+    newSegment();
+  }
+  ++m_keyframesInSegment;
+  m_pending.push_back(id);
+  m_stats.featuresMsTotal += msSince(t0);
+}
+
+bool LoopCloser::detect(const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop)
+{
+  std::vector<int> pending;
+  pending.swap(m_pending);
+  for (int id : pending) {
+    if (m_keyframes.count(id) && map.find(id) && query(id, map, connected, loop)) {
+      return true; // the later ones are not queried: their poses move with the correction
+    }
+  }
+  return false;
+}
+
+bool LoopCloser::query(int id, const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop)
+{
+  if (m_keyframesInSegment - m_keyframeOfLastLoop < m_params.minKeyframesBetween) {
+    return false;
+  }
+  BowVector bow;
+  if (!m_database.vectorOf(id, bow)) {
+    return false;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  ++m_stats.detections;
+  const std::vector<int> neighbours = map.covisibleWith(id);
+  const std::vector<double> scores = m_database.scoresWith(bow, neighbours);
+  if (scores.empty()) { // nothing to say what "alike" means here
+    m_stats.detectionMsTotal += msSince(t0);
+    return false;
+  }
+  KeyframeDatabase::Query q;
+  q.minScore = *std::min_element(scores.begin(), scores.end());
+  const std::set<int> own(neighbours.begin(), neighbours.end());
+  q.excluded = [&](int c) {
+    const auto it = m_keyframes.find(c);
+    return c == id || connected.count(c) > 0 || own.count(c) > 0 || it == m_keyframes.end() ||
+           it->second.segment != m_segment;
+  };
+  q.covisible = [&](int c) { return map.covisibleWith(c); };
+  if (std::getenv("HSLAM_LOOP_DEBUG")) {
+    std::vector<int> ids;
+    for (const auto &e : m_keyframes) {
+      ids.push_back(e.first);
+    }
+    const std::vector<double> all = m_database.scoresWith(bow, ids);
+    std::ostringstream os;
+    for (size_t i = 0; i < ids.size() && i < all.size(); ++i) {
+      os << ids[i] << (connected.count(ids[i]) ? "c" : "") << (own.count(ids[i]) ? "o" : "")
+         << (m_keyframes.at(ids[i]).segment != m_segment ? "s" : "") << "=" << all[i] << " ";
+    }
+    VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << " scores (min " << q.minScore << "): " << os.str());
+  }
+  std::vector<std::pair<int, std::vector<int>>> groups;
+  for (const KeyframeDatabase::Candidate &c : m_database.query(bow, q)) {
+    groups.emplace_back(c.id, map.covisibleWith(c.id));
+  }
+  const std::vector<int> accepted = groups.empty() ? std::vector<int>() : m_consistency.update(groups);
+  if (groups.empty()) {
+    m_consistency.clear();
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << id << ": loop query, min score " << q.minScore << ", " << groups.size()
+                                              << " candidates, " << accepted.size() << " consistent");
+  bool found = false;
+  for (size_t k = 0; k < accepted.size() && !found; ++k) {
+    const auto tv = std::chrono::steady_clock::now();
+    found = verifyCandidate(id, accepted[k], map, loop);
+    m_stats.verificationMsMax = std::max(m_stats.verificationMsMax, msSince(tv));
+  }
+  m_stats.detectionMsTotal += msSince(t0);
+  if (found) {
+    m_keyframeOfLastLoop = m_keyframesInSegment;
+    m_consistency.clear();
+    m_loopEdges.push_back(loop);
+  }
+  return found;
+}
+
+std::vector<LoopSideKeyframe> LoopCloser::side(int id, size_t neighbours, const GlobalMap &map) const
+{
+  std::vector<LoopSideKeyframe> out;
+  const GlobalKeyframe *first = map.find(id);
+  const auto self = m_keyframes.find(id);
+  if (!first || self == m_keyframes.end()) {
+    return out;
+  }
+  out.push_back({&self->second.features, SE3d()});
+  for (int n : map.covisibleWith(id)) {
+    const GlobalKeyframe *g = map.find(n);
+    const auto it = m_keyframes.find(n);
+    if (out.size() > neighbours) {
+      break;
+    }
+    if (g && it != m_keyframes.end() && it->second.segment == self->second.segment) {
+      out.push_back({&it->second.features, first->cMw * g->cMw.inverse()});
+    }
+  }
+  return out;
+}
+
+bool LoopCloser::verifyCandidate(int id, int candidate, const GlobalMap &map, DetectedLoop &loop)
+{
+  ++m_stats.candidatesVerified;
+  LoopVerificationOptions o;
+  o.maxDistance = m_params.matchMaxDistance;
+  o.ratio = m_params.matchRatio;
+  o.minMatches = m_params.minMatches;
+  o.minInliers = m_params.minInliers;
+  o.thresholdPx = m_params.ransacThresholdPx;
+  o.seed = static_cast<unsigned int>(id);
+  LoopVerification v;
+  try {
+    v = verifyLoopSides(side(id, kQueryNeighbours, map), side(candidate, kCandidateNeighbours, map), m_K, o);
+  } catch (const vpHSlamException &e) { // a degenerate configuration: this candidate is not a loop
+    VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << id << ": loop candidate " << candidate
+                                                  << " could not be verified: " << e.getStringMessage());
+    return false;
+  }
+  const bool verified = v.estimate.success;
+  VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << ": loop candidate " << candidate << ", " << v.matches
+                                             << " ORB matches, " << v.guidedMatches << " guided, "
+                                             << v.estimate.inlierCount << " Sim(3) inliers"
+                                             << (verified ? " (accepted)" : " (rejected)"));
+  if (!verified) {
+    return false;
+  }
+  // The correction of the current estimate: where the candidate's side says the keyframe is, against its pose.
+  const Sim3d current(map.find(id)->cMw * map.find(candidate)->cMw.inverse(), 1.);
+  const Sim3d::Tangent drift = (v.estimate.S21 * current.inverse()).log();
+  const double rotationDeg = drift.segment<3>(3).norm() * 180. / M_PI;
+  if (rotationDeg > m_params.maxRotationCorrectionDeg) {
+    // Odometry drifts a few degrees in rotation, not tens: a correction that large is a place that looks like
+    // another (a repeated texture, two alike doors), however consistent its geometry.
+    VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << ": loop with keyframe " << candidate
+                                               << " refused: it would rotate the map by " << rotationDeg << " degrees");
+    ++m_stats.refusedImplausible;
+    return false;
+  }
+  loop.keyframe = id;
+  loop.candidate = candidate;
+  loop.SkeyframeCandidate = v.estimate.S21;
+  LoopRecord record;
+  record.keyframe = id;
+  record.candidate = candidate;
+  record.inliers = v.estimate.inlierCount;
+  record.scale = v.estimate.S21.scale();
+  record.translationDrift = drift.head<3>().norm();
+  m_stats.loops.push_back(record);
+  VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << ": loop with keyframe " << candidate << " (" << record.inliers
+                                             << " inliers, scale " << record.scale << ", translation correction "
+                                             << record.translationDrift << ", rotation correction " << rotationDeg
+                                             << " degrees)");
+  return true;
+}
+
+bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
+                         std::vector<std::pair<int, Sim3d>> &solution)
+{
+  const GlobalKeyframe *g = map.find(loop.keyframe);
+  const bool ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopEdges, loop, solution);
+  m_stats.corrected += ok ? 1 : 0;
+  return ok;
+}
+
+void LoopCloser::rescale(int id, double scale)
+{
+  const auto it = m_keyframes.find(id);
+  if (it != m_keyframes.end() && scale > 0. && scale != 1.) {
+    it->second.features.rescale(scale);
+  }
+}
+
+void LoopCloser::removeKeyframe(int id)
+{
+  m_database.remove(id);
+  m_keyframes.erase(id);
+  m_pending.erase(std::remove(m_pending.begin(), m_pending.end(), id), m_pending.end());
+}
+
+void LoopCloser::newSegment()
+{
+  m_consistency.clear();
+  m_keyframesInSegment = 0;
+  m_keyframeOfLastLoop = 0;
+}
+
+void LoopCloser::clear()
+{
+  m_database.clear();
+  m_keyframes.clear();
+  m_pending.clear();
+  m_loopEdges.clear();
+  m_segment = 0;
+  newSegment();
+}
+
+double LoopCloser::memoryBytes() const
+{
+  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_keyframes) + vectorHeapBytes(m_loopEdges);
+  for (const auto &entry : m_keyframes) {
+    bytes += entry.second.features.memoryBytes();
+  }
+  return bytes;
+}
+
+const LoopKeyframe *LoopCloser::features(int id) const
+{
+  const auto it = m_keyframes.find(id);
+  return it == m_keyframes.end() ? nullptr : &it->second.features;
+}
+} // namespace hslam

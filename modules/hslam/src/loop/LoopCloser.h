@@ -1,0 +1,156 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file LoopCloser.h
+  \brief Loop closure as a component (paper sec. 3.4): place recognition over the stored keyframes, Sim(3)
+  verification, and the pose-graph correction it hands back to the mapper.
+
+  What it owns: every stored keyframe's loop features (LoopFeatures.h: multi-scale ORB keypoints with a depth from
+  the window), their bag-of-words database (its own: the relocalisation index keeps the window points' vectors),
+  the consistency groups of the last queries, the loop edges accepted so far, and the statistics.
+
+  What it is given: each keyframe that leaves the window (addKeyframe(): its image and the window's inverse depths,
+  once they are final), and at detect() the global map (poses, co-visibility) with the keyframes the caller counts as
+  connected to the present (the window, what it sees and re-uses). A culled keyframe is removed (removeKeyframe()).
+
+  What it hands back: detect() returns an accepted loop (the keyframe that asked, the candidate, the measured
+  similarity), and correct() the corrected similarity of every stored keyframe of the segment (the window held
+  fixed): the mapper moves its keyframes and points, and tells this component of the scales (rescale()).
+
+  Detection (ORB-SLAM2's LoopClosing rules on our graph): a keyframe is queried once it is stored and once loop
+  .minKeyframesBetween keyframes have passed since the segment's start or the last loop; candidates score at
+  least its lowest score with its co-visible stored keyframes, are not connected, and must agree over
+  loop.consistency consecutive queries; then LoopVerification.h decides, and a correction rotating the map by more
+  than loop.maxRotationCorrectionDeg is refused (aliasing).
+
+  Threading: not thread-safe; the mapping thread owns it (detection and correction run there, after the keyframe).
+*/
+#ifndef HSLAM_LOOP_LOOP_CLOSER_H
+#define HSLAM_LOOP_LOOP_CLOSER_H
+
+#include "loop/KeyframeDatabase.h"
+#include "loop/LoopDetector.h"
+#include "loop/LoopFeatures.h"
+#include "loop/LoopVerification.h"
+#include "map/GlobalMap.h"
+#include "math/Sim3.h"
+
+#include <visp3/core/vpConfig.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+
+#include <map>
+#include <set>
+#include <vector>
+
+namespace hslam
+{
+class OrbVocabulary;
+
+//! A verified loop.
+struct LoopRecord {
+  int keyframe = -1;            //!< the stored keyframe that closed it (it asked the database)
+  int candidate = -1;           //!< the stored keyframe it closed with
+  int inliers = 0;              //!< Sim(3) inliers
+  double scale = 1.;            //!< scale of the measured S_keyframe_candidate
+  double translationDrift = 0.; //!< |translation part of the correction| (map units)
+};
+
+//! Counters of loop closure since the start.
+struct LoopStatistics {
+  int candidatesVerified = 0;      //!< consistent candidates given to the Sim(3) verification
+  std::vector<LoopRecord> loops;   //!< loops accepted
+  int corrected = 0;               //!< loops whose pose-graph correction was applied
+  int refusedImplausible = 0;      //!< verified loops refused for a rotation correction above the limit
+  double lastCorrectionMs = 0.;    //!< wall time of the last correction (graph, optimisation, map update)
+  double correctionMsMax = 0.;     //!< longest correction
+  int detections = 0;              //!< keyframes checked for a loop (database queried)
+  double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
+  double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
+  double featuresMsTotal = 0.;     //!< wall time of the loop features (ORB, depths, BoW) of every stored keyframe
+  int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
+  int globalBaApplied = 0;         //!< ... and written back
+  double globalBaSecondsMax = 0.;  //!< longest of them, wall time, seconds
+  double globalBaRmsBeforePx = 0.; //!< reprojection RMS of the last one applied, before and after, pixels
+  double globalBaRmsAfterPx = 0.;
+};
+
+//! A loop that detect() accepted.
+struct DetectedLoop {
+  int keyframe = -1;        //!< stored keyframe that asked
+  int candidate = -1;       //!< stored keyframe it closed with
+  Sim3d SkeyframeCandidate; //!< measured: maps the candidate's camera into the keyframe's
+};
+
+class VISP_EXPORT LoopCloser
+{
+public:
+  //! \e vocabulary must outlive the component.
+  LoopCloser(const vpHSlamParameters::Loop &params, const PinholeIntrinsics &K, const OrbVocabulary &vocabulary);
+
+  /*!
+    Hand-over: keyframe \e id left the window. Its loop features are made from \e image and \e samples (the
+    window's points in its camera, final inverse depths) and it joins the database; it is queried at the next
+    detect(). \e segment: its map segment.
+  */
+  void addKeyframe(int id, int segment, const vpImage<unsigned char> &image, const std::vector<IdepthSample> &samples);
+
+  /*!
+    Query the keyframes handed over since the last call, oldest first, until one closes a loop. \e map gives poses
+    and co-visibility, \e connected the keyframes connected to the present (never candidates). Returns false when
+    no loop was accepted.
+  */
+  bool detect(const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop);
+
+  /*!
+    The pose graph of \e loop's segment (stored keyframes free, \e windowPoses fixed: pose-pose edges, strong
+    co-visibility, every loop edge so far and the new loop's connections). On success \e solution holds the new
+    similarity S_iw of every stored keyframe of the segment and true is returned; nothing is changed here (the caller
+    applies it, then calls rescale()).
+  */
+  bool correct(const DetectedLoop &loop, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
+               std::vector<std::pair<int, Sim3d>> &solution);
+  //! Keyframe \e id's map was divided by \e scale (a correction applied): its loop features follow.
+  void rescale(int id, double scale);
+  //! A culled keyframe leaves the database.
+  void removeKeyframe(int id);
+  //! A new map segment: queries start again (stored keyframes stay; candidates come from the same segment only).
+  void newSegment();
+  //! Drop every keyframe and loop (a new segment's mapper, vpHSlam::reset()); the statistics stay.
+  void clear();
+
+  //! Bytes held: the loop features, the database and the loop edges.
+  double memoryBytes() const;
+  //! Stored keyframes with loop features.
+  size_t size() const { return m_keyframes.size(); }
+  const LoopKeyframe *features(int id) const;
+  LoopStatistics &statistics() { return m_stats; }
+  const LoopStatistics &statistics() const { return m_stats; }
+
+private:
+  struct Entry {
+    LoopKeyframe features;
+    int segment = 0;
+  };
+  bool query(int id, const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop);
+  bool verifyCandidate(int id, int candidate, const GlobalMap &map, DetectedLoop &loop);
+  //! A side of the verification: \e id and its best co-visible keyframes that hold loop features.
+  std::vector<LoopSideKeyframe> side(int id, size_t neighbours, const GlobalMap &map) const;
+
+  vpHSlamParameters::Loop m_params;
+  PinholeIntrinsics m_K;
+  const OrbVocabulary &m_vocabulary;
+  LoopFeatureExtractor m_extractor;
+  KeyframeDatabase m_database;
+  std::map<int, Entry> m_keyframes;
+  std::vector<int> m_pending; //!< handed over, not queried yet
+  LoopConsistency m_consistency;
+  int m_segment = 0;                     //!< segment of the keyframes being queried
+  int m_keyframesInSegment = 0;          //!< handed over in this segment
+  int m_keyframeOfLastLoop = 0;          //!< m_keyframesInSegment at the last loop (or the segment's start)
+  std::vector<DetectedLoop> m_loopEdges; //!< every accepted loop, kept for the next corrections
+  LoopStatistics m_stats;
+};
+} // namespace hslam
+
+#endif
