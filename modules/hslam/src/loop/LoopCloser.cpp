@@ -13,8 +13,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdlib>
-#include <sstream>
 
 namespace hslam
 {
@@ -107,19 +105,6 @@ bool LoopCloser::query(int id, const GlobalMap &map, const std::set<int> &connec
            it->second.segment != m_segment;
   };
   q.covisible = [&](int c) { return map.covisibleWith(c); };
-  if (std::getenv("HSLAM_LOOP_DEBUG")) {
-    std::vector<int> ids;
-    for (const auto &e : m_keyframes) {
-      ids.push_back(e.first);
-    }
-    const std::vector<double> all = m_database.scoresWith(bow, ids);
-    std::ostringstream os;
-    for (size_t i = 0; i < ids.size() && i < all.size(); ++i) {
-      os << ids[i] << (connected.count(ids[i]) ? "c" : "") << (own.count(ids[i]) ? "o" : "")
-         << (m_keyframes.at(ids[i]).segment != m_segment ? "s" : "") << "=" << all[i] << " ";
-    }
-    VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << " scores (min " << q.minScore << "): " << os.str());
-  }
   std::vector<std::pair<int, std::vector<int>>> groups;
   for (const KeyframeDatabase::Candidate &c : m_database.query(bow, q)) {
     groups.emplace_back(c.id, map.covisibleWith(c.id));
