@@ -10,7 +10,7 @@ namespace hslam_dataset
 namespace
 {
 //! Median of the intervals between consecutive stamps of \e kept (at least two frames).
-template <typename Kept> double medianInterval(const std::vector<Kept> &kept)
+template <typename Kept> double medianInterval(const std::deque<Kept> &kept)
 {
   std::vector<double> intervals;
   intervals.reserve(kept.size() - 1);

@@ -8,6 +8,7 @@
 #include <visp3/core/vpImage.h>
 #include <visp3/hslam/vpHSlamImageSource.h>
 
+#include <deque>
 #include <functional>
 #include <string>
 #include <vector>
@@ -116,7 +117,9 @@ private:
   double m_lastReadStamp = 0.;
   double m_backwardInterval = 0.;
   double m_backwardOrigin = 0.; //!< t_last: the stamp the way back continues from
-  std::vector<Kept> m_kept;     //!< way-there frames not replayed yet (--there-and-back)
+  //! Way-there frames not replayed yet (--there-and-back). A deque: growing it never copies the images (a vector
+  //! would, vpImage's move constructor not being noexcept: twice their memory at each reallocation).
+  std::deque<Kept> m_kept;
   std::vector<FedStamp> m_fed;
 };
 } // namespace hslam_dataset
