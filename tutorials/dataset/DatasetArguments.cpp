@@ -7,6 +7,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 namespace hslam_dataset
 {
@@ -115,28 +116,43 @@ double parsePositive(const std::string &option, const std::string &value)
   }
   return x;
 }
-} // namespace
-
-void printUsage(const char *program, std::ostream &out)
+//! The options about what is read and which frames are tracked, in which order: false when \e option is not one.
+//! \e value reads the option's value (the next argument).
+bool parseSourceOption(const std::string &option, const std::function<std::string()> &value, Arguments &args)
 {
-  out << "Usage: " << program
-      << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
-         "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--there-and-back]\n"
-         "       [--fps HZ] [--groundtruth-out OUT.txt [--groundtruth GT.txt]]\n"
-         "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed "
-         "X]\n"
-         "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
-         "[--keyframes OUT.txt]\n"
-         "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--save-map OUT.hmap] [--load-map "
-         "MAP.hmap]\n"
-         "       [--localization-only] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
-         "       [--screenshot FILE.png] [--help]\n\n"
-         "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
-         "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
-         "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
-         "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
-         "ends the program at once.\n\n"
-         "  --input PATH       what to read (required)\n"
+  if (option == "--input") {
+    args.input = value();
+  } else if (option == "--format") {
+    args.options.format = vpHSlamImageSource::parseFormat(value());
+  } else if (option == "--camera") {
+    args.options.cameraFile = value();
+  } else if (option == "--max-frames") {
+    args.options.maxFrames = parseCount(option, value());
+  } else if (option == "--start-frame") {
+    args.options.startFrame = parseCount(option, value());
+  } else if (option == "--stride") {
+    args.stride = parseStride(value());
+  } else if (option == "--blackout") {
+    args.blackoutFrames = parseBlackout(value());
+    args.blackout = true;
+  } else if (option == "--there-and-back") {
+    args.thereAndBack = true;
+  } else if (option == "--groundtruth") {
+    args.groundTruth = value();
+  } else if (option == "--groundtruth-out") {
+    args.groundTruthOut = value();
+  } else if (option == "--fps") {
+    args.options.frameRate = parsePositive(option, value());
+  } else {
+    return false;
+  }
+  return true;
+}
+
+//! The --help lines of parseSourceOption()'s options.
+void printSourceUsage(std::ostream &out)
+{
+  out << "  --input PATH       what to read (required)\n"
          "  --format NAME      input format, detected from PATH's content by default (auto)\n"
          "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
          "                     required for image folders and videos unless camera.txt/camera.xml sits beside them\n"
@@ -170,8 +186,32 @@ void printUsage(const char *program, std::ostream &out)
          "  --groundtruth FILE ground truth read by --groundtruth-out: TUM format, camera-to-world, on the\n"
          "                     source's clock (default: groundtruth.txt in the --input folder; for EuRoC or\n"
          "                     KITTI, a TUM conversion such as ../shared/data's groundtruth_*tum.txt)\n"
-         "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
+         "  --fps HZ           frame rate of image folders and videos (default 30)\n";
+}
+
+} // namespace
+
+void printUsage(const char *program, std::ostream &out)
+{
+  out << "Usage: " << program
+      << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
+         "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--there-and-back]\n"
+         "       [--fps HZ] [--groundtruth-out OUT.txt [--groundtruth GT.txt]]\n"
+         "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed "
+         "X]\n"
+         "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
+         "[--keyframes OUT.txt]\n"
+         "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--save-map OUT.hmap] [--load-map "
+         "MAP.hmap]\n"
+         "       [--localization-only] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
+         "       [--screenshot FILE.png] [--help]\n\n"
+         "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
+         "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
+         "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
+         "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
+         "ends the program at once.\n\n";
+  printSourceUsage(out);
+  out << "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
          "                     pose-graph correction of the marginalised keyframes, relocalisation), vo-reuse\n"
          "                     (global map re-used, relocalisation; no loop closure) or vo-strict (window\n"
          "                     only, DSO-like; relocalisation only with hybrid or indirect tracking);\n"
@@ -234,29 +274,8 @@ Arguments parseArguments(int argc, const char *const argv[])
     };
     if (option == "--help" || option == "-h") {
       args.help = true;
-    } else if (option == "--input") {
-      args.input = value();
-    } else if (option == "--format") {
-      args.options.format = vpHSlamImageSource::parseFormat(value());
-    } else if (option == "--camera") {
-      args.options.cameraFile = value();
-    } else if (option == "--max-frames") {
-      args.options.maxFrames = parseCount(option, value());
-    } else if (option == "--start-frame") {
-      args.options.startFrame = parseCount(option, value());
-    } else if (option == "--stride") {
-      args.stride = parseStride(value());
-    } else if (option == "--blackout") {
-      args.blackoutFrames = parseBlackout(value());
-      args.blackout = true;
-    } else if (option == "--there-and-back") {
-      args.thereAndBack = true;
-    } else if (option == "--groundtruth") {
-      args.groundTruth = value();
-    } else if (option == "--groundtruth-out") {
-      args.groundTruthOut = value();
-    } else if (option == "--fps") {
-      args.options.frameRate = parsePositive(option, value());
+    } else if (parseSourceOption(option, value, args)) {
+      // what is read, and which frames are tracked in which order
     } else if (option == "--mode") {
       args.mode = value();
     } else if (option == "--set") {
