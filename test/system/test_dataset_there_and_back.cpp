@@ -387,3 +387,29 @@ TEST(ThereAndBack, StatisticsSayWhenTheOptionIsOff)
   EXPECT_EQ(hslam_test::jsonNumber(json, "backward_frames"), 0.) << json;
   std::remove(stats.c_str());
 }
+
+TEST(ThereAndBack, ProgramCombinesWithStartFrameAndBlackout)
+{
+  HSLAM_REQUIRE_DATASET_TUTORIAL();
+  HSLAM_REQUIRE_SHARED_DATA(dir, "tsukuba_cg_000-149");
+  const std::string stats = scratch("combined.json"), gt = scratch("combined-gt.txt");
+  // Source frames 5..24 are read as 0..19; there 0, 3, ..., 18 (6 and 9 black), back 15, ..., 0 (9 and 6 black).
+  const hslam_test::ProgramRun r = hslam_test::runProgram(
+      tutorialPath(), "--input " + dir + " --start-frame 5 --max-frames 20 --stride 3 --blackout 4:9 --there-and-back" +
+                          " --deterministic --no-display --quiet --stats " + stats + " --groundtruth-out " + gt);
+  ASSERT_EQ(r.exitCode, 0) << r.output;
+  const std::string json = hslam_test::readTextFile(stats);
+  EXPECT_EQ(hslam_test::jsonNumber(json, "frames"), 13.) << json;
+  EXPECT_EQ(hslam_test::jsonNumber(json, "frames_read"), 20.) << json;
+  EXPECT_EQ(hslam_test::jsonNumber(json, "blacked_out_frames"), 4.) << json;
+  EXPECT_EQ(hslam_test::jsonNumber(json, "backward_frames"), 6.) << json;
+  // The ground truth starts at source frame 5 (stamps index / 30) and comes back to it.
+  const vpHSlamTrajectory truth = vpHSlamTrajectory::readTum(gt);
+  ASSERT_EQ(truth.size(), 13u);
+  EXPECT_NEAR(truth.getTimestamp(0), 5. / 30., 1e-5);
+  EXPECT_NEAR(truth.getTimestamp(6), 23. / 30., 1e-5);
+  EXPECT_NEAR(truth.getTimestamp(12), 23. / 30. + 6 * 0.1, 1e-4);
+  EXPECT_EQ(truth.get_wMc(12), truth.get_wMc(0));
+  std::remove(stats.c_str());
+  std::remove(gt.c_str());
+}
