@@ -6,7 +6,9 @@
 //! (the terminal closed); the exit status is then 128 + the signal number, as a shell reports a killed program.
 //! With --skip-unreadable, an image that cannot be decoded is counted as dropped and the run carries on.
 //! Stress runs: --stride K tracks every K-th frame (large motion), --blackout A:B feeds black frames (a covered
-//! lens), --tracking-mode direct|indirect|hybrid selects the tracker. Options and statistics: tutorials/dataset/.
+//! lens), --there-and-back tracks the frames again in reverse order (re-timed after the last; --groundtruth-out
+//! writes the ground truth under the same stamps), --tracking-mode direct|indirect|hybrid selects the tracker.
+//! Options, frame playback and statistics: tutorials/dataset/.
 //!
 //!   ./tutorial-hslam-dataset --input ../shared/data/tsukuba_cg_000-149 --deterministic --no-display
 //!       --trajectory tsukuba.txt --keyframes tsukuba-kf.txt --stats tsukuba.json   (one line)
@@ -25,7 +27,9 @@
 #include <visp3/hslam/vpHSlamRectifier.h>
 
 #include "dataset/DatasetArguments.h"
+#include "dataset/DatasetGroundTruth.h"
 #include "dataset/DatasetMapOutput.h"
+#include "dataset/DatasetPlayback.h"
 #include "dataset/DatasetStatistics.h"
 
 #include <csignal>
@@ -75,7 +79,9 @@ void installTerminationHandlers()
 }
 
 //! Write every requested output; report (do not throw) failures so that each file gets its chance.
-bool writeOutputs(const Arguments &args, vpHSlam &slam, const RunOutcome &outcome)
+//! \param groundTruthOut : the --groundtruth-out poses (empty without the option).
+bool writeOutputs(const Arguments &args, vpHSlam &slam, const RunOutcome &outcome,
+                  const vpHSlamTrajectory &groundTruthOut)
 {
   bool ok = true;
   auto attempt = [&](const std::string &what, const std::function<void()> &write) {
@@ -100,6 +106,9 @@ bool writeOutputs(const Arguments &args, vpHSlam &slam, const RunOutcome &outcom
   if (!args.keyframes.empty()) {
     attempt(args.keyframes, [&]() { slam.getKeyframeTrajectory().saveTum(args.keyframes); });
   }
+  if (!args.groundTruthOut.empty()) {
+    attempt(args.groundTruthOut, [&]() { groundTruthOut.saveTum(args.groundTruthOut); });
+  }
   if (!args.stats.empty()) {
     attempt(args.stats, [&]() { writeStats(args.stats, stats, args, slam.getParameters(), outcome); });
   }
@@ -118,26 +127,9 @@ bool writeOutputs(const Arguments &args, vpHSlam &slam, const RunOutcome &outcom
   return ok;
 }
 
-int run(const Arguments &args)
+//! What the run will do, before the first frame.
+void printSetup(const Arguments &args, const vpHSlamParameters &params, const vpHSlam &slam)
 {
-  // First: a signal during the opening of a long sequence also ends the run cleanly.
-  installTerminationHandlers();
-  vpHSlamLog::setSink(vpHSlamLog::stderrSink());
-  vpHSlamLog::setLevel(vpHSlamLog::levelFromString(args.logLevel));
-  const vpHSlamParameters params = makeParameters(args);
-  if (!args.saveConfig.empty()) {
-    params.save(args.saveConfig);
-  }
-
-  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(args.input, args.options);
-  std::cout << "source: " << source->describe() << std::endl;
-  std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
-  vpHSlam slam(*source, params);
-  if (!args.loadMap.empty()) {
-    slam.loadMap(args.loadMap);
-    std::cout << "map: " << args.loadMap << " loaded"
-              << (params.system.localizationOnly ? ", localisation only (the map is not changed)" : "") << std::endl;
-  }
   std::cout << "mode: " << vpHSlamParameters::modeName(params.system.mode) << ", "
             << vpHSlamParameters::trackingModeName(params.tracking.mode) << " tracking"
             << (params.system.deterministic ? ", deterministic" : ", real time") << "; rectified " << slam.getWidth()
@@ -149,180 +141,191 @@ int run(const Arguments &args)
   if (args.blackout) {
     std::cout << "blackout: frames " << args.blackoutFrames.text() << " replaced by a black image" << std::endl;
   }
-
-  bool display = args.display;
-#if defined(VISP_HAVE_X11)
-  const char *xDisplay = std::getenv("DISPLAY");
-  if (display && (xDisplay == nullptr || *xDisplay == '\0')) {
-    std::cout << "no X display: running without window" << std::endl;
-    display = false;
+  if (args.thereAndBack) {
+    std::cout << "there and back: the frames tracked are then tracked again in reverse order, kept in memory"
+              << std::endl;
   }
-  vpDisplayX window;
-  bool windowOpen = false;
-  vpHSlamLiveView view;
-  vpImage<vpRGBa> canvas;
-  double fps = 0., lastDrawMs = 0.;
-#else
-  display = false;
-#endif
+}
 
-  const int frameCount = source->getFrameCount();
-  vpImage<unsigned char> I;
-  vpHSlamImageSource::Frame frame;
-  RunOutcome outcome;
-  double firstTimestamp = 0., lastTimestamp = 0.;
-  unsigned int &framesRead = outcome.framesRead;
-  unsigned int framesFed = 0;
-  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
-  std::string &error = outcome.error;
-  unsigned int consecutiveUnreadable = 0;
-  const double t0 = vpTime::measureTimeMs();
-  const double cpu0 = processCpuSeconds();
-  try {
-    while (g_signal == 0) {
+//! The progress line: on a terminal it rewrites itself; in a log (CI, a file) it becomes one line every
+//! kProgressLogEvery frames so the log stays readable.
+void printProgress(const vpHSlam &slam, vpHSlam::State state, const PlayedFrame &played, int frameCount,
+                   bool onTerminal)
+{
+  const vpHSlam::Statistics s = slam.getStatistics();
+  std::cerr << (onTerminal ? "\r" : "") << "frame " << played.frame.index + 1;
+  if (frameCount > 0) {
+    std::cerr << "/" << frameCount;
+  }
+  std::cerr << (played.backward ? " back" : "") << "  " << std::setw(12) << std::left << vpHSlam::stateName(state)
+            << std::right << " tracked " << s.trackedFrames << "  kf " << s.keyframes << "  pts " << s.activePoints
+            << "  trk " << std::fixed << std::setprecision(1) << s.trackingMsMedian << " ms  map "
+            << s.mappingMsPerKeyframeMedian << " ms/kf   " << (onTerminal ? "" : "\n") << std::flush;
+}
+
+/*!
+  The live view: image with the active points by inverse depth, status, top view; space pauses, q or Escape (or a
+  click) quits. Without X11, or without an X display, it shows nothing.
+*/
+class LiveWindow
+{
+public:
+  explicit LiveWindow(bool wanted) : m_enabled(wanted)
+  {
+#if defined(VISP_HAVE_X11)
+    const char *xDisplay = std::getenv("DISPLAY");
+    if (m_enabled && (xDisplay == nullptr || *xDisplay == '\0')) {
+      std::cout << "no X display: running without window" << std::endl;
+      m_enabled = false;
+    }
+#else
+    m_enabled = false;
+#endif
+  }
+
+  //! Show the frame just tracked. \return false when the user asked to quit.
+  bool show(const vpHSlam &slam, const PlayedFrame &played)
+  {
+#if defined(VISP_HAVE_X11)
+    if (!m_enabled) {
+      return true;
+    }
+    const double now = vpTime::measureTimeMs();
+    if (m_lastDrawMs > 0. && now > m_lastDrawMs) {
+      const double instantFps = 1000. / (now - m_lastDrawMs);
+      m_fps = m_fps > 0. ? 0.9 * m_fps + 0.1 * instantFps : instantFps;
+    }
+    m_lastDrawMs = now;
+    const std::string way = played.backward ? "way back  " : "";
+    m_view.draw(slam, played.frame.index, m_fps, m_canvas,
+                way + (played.blackedOut ? "blackout  q: quit" : "space: pause  q: quit"));
+    if (!m_open) {
       try {
-        if (!source->acquire(I, frame)) {
-          break;
+        m_window.init(m_canvas, 0, 0, "H-SLAM");
+        m_open = true;
+      } catch (const vpException &e) {
+        std::cerr << "warning: cannot open a window (" << e.getStringMessage() << "): running without display"
+                  << std::endl;
+        m_enabled = false;
+        return true;
+      }
+    }
+    vpDisplay::display(m_canvas);
+    vpDisplay::flush(m_canvas);
+    return !waitForKeys();
+#else
+    (void)slam;
+    (void)played;
+    return true;
+#endif
+  }
+
+  //! With a window: save the last view shown as a PNG (a failure is a warning).
+  void saveScreenshot(const std::string &path)
+  {
+#if defined(VISP_HAVE_X11)
+    if (!m_open || path.empty()) {
+      return;
+    }
+    try {
+      vpImage<vpRGBa> shot;
+      vpDisplay::getImage(m_canvas, shot);
+      vpHSlamImageIo::writePng(path, shot);
+      std::cout << "screenshot: " << path << std::endl;
+    } catch (const vpException &e) {
+      std::cerr << "warning: cannot save the screenshot '" << path << "': " << e.getStringMessage() << std::endl;
+    }
+#else
+    (void)path;
+#endif
+  }
+
+private:
+#if defined(VISP_HAVE_X11)
+  //! Keys and clicks: true when the user quits; space (or p) pauses until pressed again.
+  bool waitForKeys()
+  {
+    bool quit = vpDisplay::getClick(m_canvas, false);
+    std::string key;
+    bool paused = false;
+    while (!quit && g_signal == 0) {
+      if (vpDisplay::getKeyboardEvent(m_canvas, key, false)) {
+        if (key == "q" || key == "Q" || key == "\x1b" || key == "Escape") {
+          quit = true;
+        } else if (key == " " || key == "space" || key == "p") {
+          paused = !paused;
         }
-        consecutiveUnreadable = 0;
-      } catch (const vpHSlamException &e) {
-        // The source consumed the frame it could not read: the next acquire() reads the one after.
-        if (!args.skipUnreadable || e.getCode() != vpHSlamException::fileUnreadable ||
-            ++consecutiveUnreadable >= kMaxConsecutiveUnreadable) {
-          throw;
-        }
-        ++outcome.droppedFrames;
-        std::cerr << (progressOnTerminal && !args.quiet ? "\n" : "") << "warning: dropped an unreadable frame ("
-                  << e.getStringMessage() << ")" << std::endl;
-        continue;
       }
-      if (framesRead == 0) {
-        firstTimestamp = frame.timestamp;
+      quit = quit || vpDisplay::getClick(m_canvas, false);
+      if (!paused) {
+        break;
       }
-      lastTimestamp = frame.timestamp;
-      ++framesRead;
-      // --stride and --blackout go by the source's numbering (after --start-frame; an unreadable frame dropped by
-      // --skip-unreadable keeps its number), so a run with dropped frames still tracks the same frames.
-      if (!args.feeds(frame.index)) {
-        continue;
-      }
-      if (args.blacksOut(frame.index)) {
-        I = 0; // a covered lens: same size, same timestamp and exposure
-        ++outcome.blackedOutFrames;
-      }
+      vpTime::wait(20.);
+    }
+    return quit;
+  }
+
+  vpDisplayX m_window;
+  bool m_open = false;
+  vpHSlamLiveView m_view;
+  vpImage<vpRGBa> m_canvas;
+  double m_fps = 0., m_lastDrawMs = 0.;
+#endif
+  bool m_enabled;
+};
+
+//! The frame loop: every frame of \e playback tracked, until its end, a signal, the user's q or an error (returned
+//! in \e outcome.error, not thrown).
+void trackFrames(const Arguments &args, const vpHSlamParameters &params, vpHSlam &slam, FramePlayback &playback,
+                 int frameCount, RunOutcome &outcome)
+{
+  LiveWindow window(args.display);
+  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
+  vpImage<unsigned char> I;
+  PlayedFrame played;
+  unsigned int framesFed = 0;
+  const double t0 = vpTime::measureTimeMs();
+  try {
+    while (g_signal == 0 && playback.next(I, played)) {
       ++framesFed;
       if (!params.system.deterministic && args.speed > 0.) {
         // A recorded sequence played like a live camera: frame i is not available before its time.
-        const double dueMs = t0 + 1000. * (frame.timestamp - firstTimestamp) / args.speed;
+        const double dueMs = t0 + 1000. * (played.frame.timestamp - playback.getFirstStamp()) / args.speed;
         const double waitMs = dueMs - vpTime::measureTimeMs();
         if (waitMs > 0.) {
           vpTime::sleepMs(waitMs);
         }
       }
-      const vpHSlam::State state = slam.track(I, frame.timestamp, frame.exposure);
-      // On a terminal the progress line rewrites itself; in a log (CI, a file) it becomes one line every
-      // kProgressLogEvery frames so the log stays readable.
+      const vpHSlam::State state = slam.track(I, played.frame.timestamp, played.frame.exposure);
       if (!args.quiet && (progressOnTerminal || framesFed % kProgressLogEvery == 0)) {
-        const vpHSlam::Statistics s = slam.getStatistics();
-        std::cerr << (progressOnTerminal ? "\r" : "") << "frame " << frame.index + 1;
-        if (frameCount > 0) {
-          std::cerr << "/" << frameCount;
-        }
-        std::cerr << "  " << std::setw(12) << std::left << vpHSlam::stateName(state) << std::right << " tracked "
-                  << s.trackedFrames << "  kf " << s.keyframes << "  pts " << s.activePoints << "  trk " << std::fixed
-                  << std::setprecision(1) << s.trackingMsMedian << " ms  map " << s.mappingMsPerKeyframeMedian
-                  << " ms/kf   " << (progressOnTerminal ? "" : "\n") << std::flush;
+        printProgress(slam, state, played, frameCount, progressOnTerminal);
       }
-#if defined(VISP_HAVE_X11)
-      if (display) {
-        // Live view: image with the active points by inverse depth, status, top view; space pauses, q or
-        // Escape (or a click) quits.
-        const double now = vpTime::measureTimeMs();
-        if (lastDrawMs > 0. && now > lastDrawMs) {
-          const double instantFps = 1000. / (now - lastDrawMs);
-          fps = fps > 0. ? 0.9 * fps + 0.1 * instantFps : instantFps;
-        }
-        lastDrawMs = now;
-        view.draw(slam, frame.index, fps, canvas,
-                  args.blacksOut(frame.index) ? "blackout  q: quit" : "space: pause  q: quit");
-        if (!windowOpen) {
-          try {
-            window.init(canvas, 0, 0, "H-SLAM");
-            windowOpen = true;
-          } catch (const vpException &e) {
-            std::cerr << "warning: cannot open a window (" << e.getStringMessage() << "): running without display"
-                      << std::endl;
-            display = false;
-            continue;
-          }
-        }
-        vpDisplay::display(canvas);
-        vpDisplay::flush(canvas);
-        bool quit = vpDisplay::getClick(canvas, false);
-        std::string key;
-        bool paused = false;
-        while (!quit && g_signal == 0) {
-          if (vpDisplay::getKeyboardEvent(canvas, key, false)) {
-            if (key == "q" || key == "Q" || key == "\x1b" || key == "Escape") {
-              quit = true;
-            } else if (key == " " || key == "space" || key == "p") {
-              paused = !paused;
-            }
-          }
-          quit = quit || vpDisplay::getClick(canvas, false);
-          if (!paused) {
-            break;
-          }
-          vpTime::wait(20.);
-        }
-        if (quit) {
-          break;
-        }
+      if (!window.show(slam, played)) {
+        break;
       }
-#endif
     }
   } catch (const vpException &e) {
-    error = e.getStringMessage();
+    outcome.error = e.getStringMessage();
   } catch (const std::exception &e) {
-    error = e.what();
+    outcome.error = e.what();
   }
   slam.synchronize();
-#if defined(VISP_HAVE_X11)
-  if (windowOpen && !args.screenshot.empty()) {
-    try {
-      vpImage<vpRGBa> shot;
-      vpDisplay::getImage(canvas, shot);
-      vpHSlamImageIo::writePng(args.screenshot, shot);
-      std::cout << "screenshot: " << args.screenshot << std::endl;
-    } catch (const vpException &e) {
-      std::cerr << "warning: cannot save the screenshot '" << args.screenshot << "': " << e.getStringMessage()
-                << std::endl;
-    }
-  }
-#endif
-  const int signal = g_signal; // read once: a signal arriving from now on only ends the program if repeated
-  outcome.signal = signal;
-  outcome.wallS = (vpTime::measureTimeMs() - t0) / 1000.;
-  outcome.cpuS = processCpuSeconds() - cpu0;
-  const double wallS = outcome.wallS, cpuS = outcome.cpuS;
+  window.saveScreenshot(args.screenshot);
   if (!args.quiet && progressOnTerminal) {
     std::cerr << std::endl;
   }
-  if (signal != 0) {
-    std::cout << "interrupted by " << signalName(signal) << ": writing what was computed" << std::endl;
-  }
-  if (!error.empty()) {
-    std::cerr << "error after " << framesRead << " frames: " << error << " (writing what was computed)" << std::endl;
-  }
+}
 
-  const vpHSlam::Statistics s = slam.getStatistics();
-  const double videoS = framesRead > 1 ? (lastTimestamp - firstTimestamp) * framesRead / (framesRead - 1) : 0.;
-  outcome.videoS = videoS;
+//! The summary printed at the end of a run.
+void printSummary(const Arguments &args, const vpHSlamParameters &params, const vpHSlam::Statistics &s,
+                  const RunOutcome &outcome)
+{
   std::cout << "frames: " << s.frames << ", tracked: " << s.trackedFrames << " (" << std::fixed << std::setprecision(1)
             << (s.frames ? 100. * s.trackedFrames / s.frames : 0.) << " %), lost: " << s.lostFrames
             << ", segments: " << s.segments << ", keyframes: " << s.keyframes
             << (args.skipUnreadable ? ", dropped (unreadable): " + std::to_string(outcome.droppedFrames) : "")
-            << (args.stride > 1 ? ", read: " + std::to_string(framesRead) : "")
+            << (args.stride > 1 || args.thereAndBack ? ", read: " + std::to_string(outcome.framesRead) : "")
+            << (args.thereAndBack ? ", way back: " + std::to_string(outcome.backwardFrames) : "")
             << (args.blackout ? ", blacked out: " + std::to_string(outcome.blackedOutFrames) : "") << "\n"
             << "tracking: " << std::setprecision(2) << s.trackingMsMedian << " ms median, " << s.trackingMsP95
             << " ms p95; mapping: " << s.mappingMsPerKeyframeMedian << " ms per keyframe (median)\n";
@@ -331,22 +334,92 @@ int run(const Arguments &args)
               << s.geometricWeightMedian << "; relocalisations " << s.relocalizationsSucceeded << "/"
               << s.relocalizationsAttempted << "\n";
   }
+  const double wallS = outcome.wallS, videoS = outcome.videoS;
   std::cout << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
-            << (wallS > 0. ? videoS / wallS : 0.) << "x real time), CPU " << cpuS << " s; peak memory "
+            << (wallS > 0. ? videoS / wallS : 0.) << "x real time), CPU " << outcome.cpuS << " s; peak memory "
             << std::setprecision(1) << peakRssMb() << " MB" << std::endl;
   if (s.segments > 1) {
     std::cout << "warning: tracking was lost; the trajectory has " << s.segments
               << " map segments with independent scales (see the .segN.txt files)" << std::endl;
   }
-  const bool written = writeOutputs(args, slam, outcome);
+}
+
+//! --groundtruth-out's poses for the frames fed (empty without the option), with a word on those left without one.
+vpHSlamTrajectory makeGroundTruthOut(const vpHSlamTrajectory &groundTruth, const FramePlayback &playback)
+{
+  const std::vector<FedStamp> &fed = playback.getFedStamps();
+  vpHSlamTrajectory out = groundTruthOfFedFrames(groundTruth, fed);
+  if (out.size() < fed.size()) {
+    std::cerr << "warning: --groundtruth-out: " << fed.size() - out.size() << " of " << fed.size()
+              << " frames tracked have no ground-truth pose within " << kGroundTruthMaxDt << " s of their stamp"
+              << std::endl;
+  }
+  return out;
+}
+
+int run(const Arguments &args)
+{
+  // First: a signal during the opening of a long sequence also ends the run cleanly.
+  installTerminationHandlers();
+  vpHSlamLog::setSink(vpHSlamLog::stderrSink());
+  vpHSlamLog::setLevel(vpHSlamLog::levelFromString(args.logLevel));
+  const vpHSlamParameters params = makeParameters(args);
+  if (!args.saveConfig.empty()) {
+    params.save(args.saveConfig);
+  }
+  // Read before the run: a missing or malformed ground truth is reported now, not after a long sequence.
+  const std::string groundTruthPath = groundTruthInput(args);
+  const vpHSlamTrajectory groundTruth =
+      groundTruthPath.empty() ? vpHSlamTrajectory() : vpHSlamTrajectory::readTum(groundTruthPath);
+
+  std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create(args.input, args.options);
+  std::cout << "source: " << source->describe() << std::endl;
+  std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
+  vpHSlam slam(*source, params);
+  if (!args.loadMap.empty()) {
+    slam.loadMap(args.loadMap);
+    std::cout << "map: " << args.loadMap << " loaded"
+              << (params.system.localizationOnly ? ", localisation only (the map is not changed)" : "") << std::endl;
+  }
+  printSetup(args, params, slam);
+  const bool progressOnTerminal = ::isatty(STDERR_FILENO) != 0;
+  FramePlayback playback(*source, args, [&](const std::string &message) {
+    std::cerr << (progressOnTerminal && !args.quiet ? "\n" : "") << "warning: dropped an unreadable frame (" << message
+              << ")" << std::endl;
+  });
+
+  RunOutcome outcome;
+  const double t0 = vpTime::measureTimeMs();
+  const double cpu0 = processCpuSeconds();
+  trackFrames(args, params, slam, playback, source->getFrameCount(), outcome);
+  const int signal = g_signal; // read once: a signal arriving from now on only ends the program if repeated
+  outcome.signal = signal;
+  outcome.wallS = (vpTime::measureTimeMs() - t0) / 1000.;
+  outcome.cpuS = processCpuSeconds() - cpu0;
+  outcome.framesRead = playback.getFramesRead();
+  outcome.droppedFrames = playback.getDroppedFrames();
+  outcome.blackedOutFrames = playback.getBlackedOutFrames();
+  outcome.backwardFrames = playback.getBackwardFrames();
+  outcome.videoS = playback.getPlayedSeconds();
+  if (signal != 0) {
+    std::cout << "interrupted by " << signalName(signal) << ": writing what was computed" << std::endl;
+  }
+  if (!outcome.error.empty()) {
+    std::cerr << "error after " << outcome.framesRead << " frames: " << outcome.error << " (writing what was computed)"
+              << std::endl;
+  }
+  printSummary(args, params, slam.getStatistics(), outcome);
+  const vpHSlamTrajectory groundTruthOut =
+      args.groundTruthOut.empty() ? vpHSlamTrajectory() : makeGroundTruthOut(groundTruth, playback);
+  const bool written = writeOutputs(args, slam, outcome, groundTruthOut);
   if (g_signal != 0) {     // also a signal that came while the files were written
     return 128 + g_signal; // the shell convention for a program ended by a signal
   }
-  if (framesRead == 0 && error.empty()) {
+  if (outcome.framesRead == 0 && outcome.error.empty()) {
     std::cerr << "error: no frame could be read from '" << args.input << "'" << std::endl;
     return EXIT_FAILURE;
   }
-  return (error.empty() && written) ? EXIT_SUCCESS : EXIT_FAILURE;
+  return (outcome.error.empty() && written) ? EXIT_SUCCESS : EXIT_FAILURE;
 }
 } // namespace
 

@@ -7,6 +7,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 namespace hslam_dataset
 {
@@ -77,6 +78,29 @@ void checkTrackingMode(const std::string &value)
   }
 }
 
+//! Options that do not go together, refused before the source is opened.
+void checkCombinations(const Arguments &args)
+{
+  if (!args.groundTruth.empty() && args.groundTruthOut.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--groundtruth '" + args.groundTruth +
+                               "' is only read to write --groundtruth-out FILE: give that too (or leave it out)");
+  }
+  // A camera has no last frame to turn back at. The format as the source will see it: given, or detected from the
+  // path (no image is opened); FramePlayback checks the opened source again.
+  if (!args.thereAndBack) {
+    return;
+  }
+  const vpHSlamImageSource::Format format = args.options.format != vpHSlamImageSource::formatAuto
+                                                ? args.options.format
+                                                : vpHSlamImageSource::detectFormat(args.input);
+  if (format == vpHSlamImageSource::formatV4l2) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "--there-and-back needs a recorded sequence, not a live camera ('" + args.input +
+                               "'): a camera has no last frame to turn back at");
+  }
+}
+
 double parsePositive(const std::string &option, const std::string &value)
 {
   std::size_t used = 0;
@@ -92,13 +116,87 @@ double parsePositive(const std::string &option, const std::string &value)
   }
   return x;
 }
+//! The options about what is read and which frames are tracked, in which order: false when \e option is not one.
+//! \e value reads the option's value (the next argument).
+bool parseSourceOption(const std::string &option, const std::function<std::string()> &value, Arguments &args)
+{
+  if (option == "--input") {
+    args.input = value();
+  } else if (option == "--format") {
+    args.options.format = vpHSlamImageSource::parseFormat(value());
+  } else if (option == "--camera") {
+    args.options.cameraFile = value();
+  } else if (option == "--max-frames") {
+    args.options.maxFrames = parseCount(option, value());
+  } else if (option == "--start-frame") {
+    args.options.startFrame = parseCount(option, value());
+  } else if (option == "--stride") {
+    args.stride = parseStride(value());
+  } else if (option == "--blackout") {
+    args.blackoutFrames = parseBlackout(value());
+    args.blackout = true;
+  } else if (option == "--there-and-back") {
+    args.thereAndBack = true;
+  } else if (option == "--groundtruth") {
+    args.groundTruth = value();
+  } else if (option == "--groundtruth-out") {
+    args.groundTruthOut = value();
+  } else if (option == "--fps") {
+    args.options.frameRate = parsePositive(option, value());
+  } else {
+    return false;
+  }
+  return true;
+}
+
+//! The --help lines of parseSourceOption()'s options.
+void printSourceUsage(std::ostream &out)
+{
+  out << "  --input PATH       what to read (required)\n"
+         "  --format NAME      input format, detected from PATH's content by default (auto)\n"
+         "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
+         "                     required for image folders and videos unless camera.txt/camera.xml sits beside them\n"
+         "  --max-frames N     stop after N frames READ from the source (0 = all, default); with --stride K,\n"
+         "                     ceil(N / K) of them are tracked (and again, but the last, with --there-and-back)\n"
+         "  --start-frame N    skip the first N frames (default 0); the frame after them is frame 0 for\n"
+         "                     --stride and --blackout\n"
+         "  --stride K         track only frames 0, K, 2K, ... of the source (default 1: all), to simulate a\n"
+         "                     K times larger motion between frames; the others are read and skipped\n"
+         "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
+         "                     and timestamp: a covered lens (default: none)\n"
+         "  --there-and-back   after the last frame, track the sequence again backward to its first frame, so\n"
+         "                     the way back revisits every place. The way there is the frames the options above\n"
+         "                     select (--start-frame, --max-frames, --stride); the way back replays those same\n"
+         "                     M frames in reverse, from the second-to-last to the first (M frames become\n"
+         "                     2M - 1). Frame k of the way back is stamped t_last + k dt (t_last: the last\n"
+         "                     stamp there; dt: the median interval between the frames tracked there, i.e. the\n"
+         "                     frame interval times K with --stride K). --blackout goes by source index: a\n"
+         "                     blacked-out frame is black both ways. The sources cannot seek, so the images\n"
+         "                     tracked are kept in memory (grey, 8 bits, 0.3 MB per 640x480 frame: memory grows\n"
+         "                     with the sequence; released on the way back). No way back after an error, a\n"
+         "                     signal or q. Refused with a live camera. Evaluate against --groundtruth-out\n"
+         "  --groundtruth-out FILE  the ground truth of every frame tracked, under the stamp it was tracked with\n"
+         "                     (TUM): a frame of the way there gets the ground-truth pose nearest its stamp\n"
+         "                     within "
+      << kGroundTruthMaxDt
+      << " s (one to one, as tutorial-hslam-evaluate does), a frame of the way\n"
+         "                     back the pose of the same source frame there. Give it to tutorial-hslam-evaluate\n"
+         "                     --groundtruth with the --trajectory file (same stamps). With or without\n"
+         "                     --there-and-back; written also after an error or a signal (the frames tracked)\n"
+         "  --groundtruth FILE ground truth read by --groundtruth-out: TUM format, camera-to-world, on the\n"
+         "                     source's clock (default: groundtruth.txt in the --input folder; for EuRoC or\n"
+         "                     KITTI, a TUM conversion such as ../shared/data's groundtruth_*tum.txt)\n"
+         "  --fps HZ           frame rate of image folders and videos (default 30)\n";
+}
+
 } // namespace
 
 void printUsage(const char *program, std::ostream &out)
 {
   out << "Usage: " << program
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
-         "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--fps HZ]\n"
+         "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--there-and-back]\n"
+         "       [--fps HZ] [--groundtruth-out OUT.txt [--groundtruth GT.txt]]\n"
          "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed "
          "X]\n"
          "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
@@ -111,21 +209,9 @@ void printUsage(const char *program, std::ostream &out)
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
          "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
          "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
-         "ends the program at once.\n\n"
-         "  --input PATH       what to read (required)\n"
-         "  --format NAME      input format, detected from PATH's content by default (auto)\n"
-         "  --camera FILE      camera file (DSO camera.txt, ViSP XML, EuRoC sensor.yaml, KITTI calib.txt);\n"
-         "                     required for image folders and videos unless camera.txt/camera.xml sits beside them\n"
-         "  --max-frames N     stop after N frames READ from the source (0 = all, default); with --stride K,\n"
-         "                     ceil(N / K) of them are tracked\n"
-         "  --start-frame N    skip the first N frames (default 0); the frame after them is frame 0 for\n"
-         "                     --stride and --blackout\n"
-         "  --stride K         track only frames 0, K, 2K, ... of the source (default 1: all), to simulate a\n"
-         "                     K times larger motion between frames; the others are read and skipped\n"
-         "  --blackout A:B     replace frames A to B (inclusive, 0 <= A <= B) by a black image of the same size\n"
-         "                     and timestamp: a covered lens (default: none)\n"
-         "  --fps HZ           frame rate of image folders and videos (default 30)\n"
-         "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
+         "ends the program at once.\n\n";
+  printSourceUsage(out);
+  out << "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
          "                     pose-graph correction of the marginalised keyframes, relocalisation), vo-reuse\n"
          "                     (global map re-used, relocalisation; no loop closure) or vo-strict (window\n"
          "                     only, DSO-like; relocalisation only with hybrid or indirect tracking);\n"
@@ -150,7 +236,8 @@ void printUsage(const char *program, std::ostream &out)
          "                     wall_s, cpu_s, hybrid tracking (orb_matches_median, orb_inliers_median,\n"
          "                     geometric_weight_median, relocalizations_attempted, relocalizations_succeeded,\n"
          "                     descriptor_kb_per_keyframe), the run's tracking_mode, stride, blackout (\"A:B\" or\n"
-         "                     \"\") and blacked_out_frames, global map (marginalized_keyframes, culled_keyframes,\n"
+         "                     \"\"), blacked_out_frames (both ways), there_and_back (true/false) and\n"
+         "                     backward_frames, global map (marginalized_keyframes, culled_keyframes,\n"
          "                     global_points, reactivated_points_per_keyframe, window_share_from_global), ...\n"
          "  --map-ply FILE     the map as a PLY point cloud: active points orange, global map grey, keyframes red\n"
          "  --map-png FILE     top view of the map points and the trajectory (PNG)\n"
@@ -187,23 +274,8 @@ Arguments parseArguments(int argc, const char *const argv[])
     };
     if (option == "--help" || option == "-h") {
       args.help = true;
-    } else if (option == "--input") {
-      args.input = value();
-    } else if (option == "--format") {
-      args.options.format = vpHSlamImageSource::parseFormat(value());
-    } else if (option == "--camera") {
-      args.options.cameraFile = value();
-    } else if (option == "--max-frames") {
-      args.options.maxFrames = parseCount(option, value());
-    } else if (option == "--start-frame") {
-      args.options.startFrame = parseCount(option, value());
-    } else if (option == "--stride") {
-      args.stride = parseStride(value());
-    } else if (option == "--blackout") {
-      args.blackoutFrames = parseBlackout(value());
-      args.blackout = true;
-    } else if (option == "--fps") {
-      args.options.frameRate = parsePositive(option, value());
+    } else if (parseSourceOption(option, value, args)) {
+      // what is read, and which frames are tracked in which order
     } else if (option == "--mode") {
       args.mode = value();
     } else if (option == "--set") {
@@ -263,6 +335,9 @@ Arguments parseArguments(int argc, const char *const argv[])
   if (!args.help && args.localizationOnly && args.loadMap.empty()) {
     throw vpHSlamException(vpHSlamException::invalidArgument,
                            "--localization-only needs a map to locate frames in: --load-map FILE");
+  }
+  if (!args.help) {
+    checkCombinations(args);
   }
   return args;
 }

@@ -16,6 +16,10 @@ namespace hslam_dataset
 //! broken as a whole (a wrong folder, a dead disk), not a frame here and there.
 constexpr unsigned int kMaxConsecutiveUnreadable = 100;
 
+//! --groundtruth-out: largest |frame stamp - ground-truth stamp| of an association, seconds (tutorial-hslam-evaluate's
+//! default --max-dt, so the way there is compared with the poses a plain evaluation would pick).
+constexpr double kGroundTruthMaxDt = 0.02;
+
 //! Frames A to B (inclusive) of the source, numbered from 0 after --start-frame (vpHSlamImageSource::Frame::index).
 struct FrameInterval {
   unsigned int first = 0;
@@ -38,6 +42,11 @@ struct Arguments {
   unsigned int stride = 1;
   bool blackout = false;        //!< replace the frames of blackoutFrames by a black image (a covered lens)
   FrameInterval blackoutFrames; //!< meaningful when blackout is true
+  //! --there-and-back: after the frames selected (--start-frame, --max-frames, --stride), the same frames in reverse
+  //! order from the second-to-last, re-timed after the last one (see FramePlayback).
+  bool thereAndBack = false;
+  std::string groundTruth;    //!< --groundtruth: the ground truth (TUM) --groundtruth-out is made from
+  std::string groundTruthOut; //!< --groundtruth-out: ground truth of the frames given to tracking, as tracked
   std::string config;
   std::string trajectory;
   std::string keyframes;

@@ -95,6 +95,8 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const Arg
       << "  \"tracking_mode\": " << jsonString(vpHSlamParameters::trackingModeName(params.tracking.mode)) << ",\n"
       << "  \"stride\": " << args.stride << ",\n"
       << "  \"blackout\": " << jsonString(args.blackoutText()) << ",\n"
+      << "  \"there_and_back\": " << (args.thereAndBack ? "true" : "false") << ",\n"
+      << "  \"backward_frames\": " << outcome.backwardFrames << ",\n"
       << "  \"frames\": " << s.frames << ",\n"
       << "  \"frames_read\": " << outcome.framesRead << ",\n"
       << "  \"blacked_out_frames\": " << outcome.blackedOutFrames << ",\n"

@@ -15,9 +15,10 @@ namespace hslam_dataset
 struct RunOutcome {
   double wallS = 0.;                 //!< wall-clock time of the frame loop, seconds
   double cpuS = 0.;                  //!< CPU time (user + system, all threads) of the frame loop, seconds
-  double videoS = 0.;                //!< duration of the frames read, by their timestamps, seconds
+  double videoS = 0.;                //!< duration of the frames read, by their timestamps, and of the way back, s
   unsigned int framesRead = 0;       //!< frames read from the source (fed to tracking or skipped by --stride)
-  unsigned int blackedOutFrames = 0; //!< frames fed to tracking as a black image (--blackout)
+  unsigned int blackedOutFrames = 0; //!< frames fed to tracking as a black image (--blackout), both ways
+  unsigned int backwardFrames = 0;   //!< frames fed to tracking on the way back (--there-and-back)
   unsigned int droppedFrames = 0;    //!< unreadable frames skipped (--skip-unreadable)
   int signal = 0;                    //!< termination signal that stopped the run, 0 when none
   std::string error;                 //!< error that stopped the run, empty when none
