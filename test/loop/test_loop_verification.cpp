@@ -104,27 +104,45 @@ TEST(LoopVerification, RejectsAPlaceThatOnlyLooksAlike)
 
 TEST(LoopVerification, WidensThroughACoVisibleKeyframe)
 {
-  // The candidate alone shares 12 points with the query (under minMatches); its neighbour, 0.3 units to the side,
-  // shares 30 more. Expressed in the candidate's camera through its pose, the neighbour's points complete the side.
-  const Pair p = makePair(42, 0, 20, 5);
+  // The candidate alone shares 25 points with the query (under minInliers, 40); its neighbour, 0.3 units to the side,
+  // shares 25 more. Expressed in the candidate's camera through its pose, the neighbour's points complete the side.
+  const Pair p = makePair(50, 0, 20, 5);
   LoopKeyframe candidate = p.candidate, neighbour = p.candidate;
   const SE3d candidateMneighbour(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.3, 0., 0.));
-  candidate.X.resize(12);
-  candidate.orb.resize(12);
-  candidate.octave.resize(12);
+  candidate.X.resize(25);
+  candidate.orb.resize(25);
+  candidate.octave.resize(25);
   neighbour.id = 21;
   for (Eigen::Vector3f &X : neighbour.X) { // the neighbour holds its points in its own camera
     X = (candidateMneighbour.inverse() * Eigen::Vector3d(X.cast<double>())).cast<float>();
   }
-  neighbour.X.erase(neighbour.X.begin(), neighbour.X.begin() + 12);
-  neighbour.orb.erase(neighbour.orb.begin(), neighbour.orb.begin() + 12);
-  neighbour.octave.erase(neighbour.octave.begin(), neighbour.octave.begin() + 12);
+  neighbour.X.erase(neighbour.X.begin(), neighbour.X.begin() + 25);
+  neighbour.orb.erase(neighbour.orb.begin(), neighbour.orb.begin() + 25);
+  neighbour.octave.erase(neighbour.octave.begin(), neighbour.octave.begin() + 25);
   const hslam::LoopVerificationOptions options;
   EXPECT_FALSE(hslam::verifyLoopSides({{&p.query, SE3d()}}, {{&candidate, SE3d()}}, K, options).estimate.success);
   const hslam::LoopVerification v = hslam::verifyLoopSides(
       {{&p.query, SE3d()}}, {{&candidate, SE3d()}, {&neighbour, candidateMneighbour}}, K, options);
   ASSERT_TRUE(v.estimate.success);
-  EXPECT_GE(v.estimate.inlierCount, 40);
+  EXPECT_GE(v.estimate.inlierCount, 45);
+  EXPECT_EQ(v.centralInliers, 25);
   EXPECT_NEAR(v.estimate.S21.scale(), 0.8, 1e-3);
+}
+
+TEST(LoopVerification, NeedsTheTwoEndsThemselves)
+{
+  // 60 points shared, but the candidate itself holds only 10 of them: its neighbour alone sees the place. A
+  // similarity between the two ends is not measured by it (the neighbours' poses stand in for the loop).
+  const Pair p = makePair(60, 0, 20, 6);
+  LoopKeyframe candidate = p.candidate, neighbour = p.candidate;
+  candidate.X.resize(10);
+  candidate.orb.resize(10);
+  candidate.octave.resize(10);
+  neighbour.id = 21;
+  const hslam::LoopVerification v = hslam::verifyLoopSides(
+      {{&p.query, SE3d()}}, {{&candidate, SE3d()}, {&neighbour, SE3d()}}, K, hslam::LoopVerificationOptions());
+  EXPECT_GE(v.matches, 50);
+  EXPECT_LE(v.centralInliers, 10);
+  EXPECT_FALSE(v.estimate.success);
 }
 } // namespace

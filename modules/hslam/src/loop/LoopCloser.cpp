@@ -125,12 +125,12 @@ bool LoopCloser::query(int id, const GlobalMap &map, const std::set<int> &connec
   if (found) {
     m_keyframeOfLastLoop = m_keyframesInSegment;
     m_consistency.clear();
-    m_loopEdges.push_back(loop);
   }
   return found;
 }
 
-std::vector<LoopSideKeyframe> LoopCloser::side(int id, size_t neighbours, const GlobalMap &map) const
+std::vector<LoopSideKeyframe> LoopCloser::side(int id, size_t neighbours, const GlobalMap &map,
+                                               const std::set<int> &excluded) const
 {
   std::vector<LoopSideKeyframe> out;
   const GlobalKeyframe *first = map.find(id);
@@ -145,7 +145,7 @@ std::vector<LoopSideKeyframe> LoopCloser::side(int id, size_t neighbours, const 
     if (out.size() > neighbours) {
       break;
     }
-    if (g && it != m_keyframes.end() && it->second.segment == self->second.segment) {
+    if (g && it != m_keyframes.end() && it->second.segment == self->second.segment && !excluded.count(n)) {
       out.push_back({&it->second.features, first->cMw * g->cMw.inverse()});
     }
   }
@@ -164,7 +164,14 @@ bool LoopCloser::verifyCandidate(int id, int candidate, const GlobalMap &map, De
   o.seed = static_cast<unsigned int>(id);
   LoopVerification v;
   try {
-    v = verifyLoopSides(side(id, kQueryNeighbours, map), side(candidate, kCandidateNeighbours, map), m_K, o);
+    // The candidate's side shares no keyframe with the query's nor with what the query sees: two sides holding the
+    // same keyframe (a neighbour of both ends of a short loop) match it with itself, a perfect and meaningless fit.
+    const std::vector<LoopSideKeyframe> query = side(id, kQueryNeighbours, map, {});
+    std::set<int> querySide = {id};
+    for (int n : map.covisibleWith(id)) {
+      querySide.insert(n);
+    }
+    v = verifyLoopSides(query, side(candidate, kCandidateNeighbours, map, querySide), m_K, o);
   } catch (const vpHSlamException &e) { // a degenerate configuration: this candidate is not a loop
     VP_HSLAM_LOG(vpHSlamLog::warning, "keyframe " << id << ": loop candidate " << candidate
                                                   << " could not be verified: " << e.getStringMessage());
@@ -173,8 +180,8 @@ bool LoopCloser::verifyCandidate(int id, int candidate, const GlobalMap &map, De
   const bool verified = v.estimate.success;
   VP_HSLAM_LOG(vpHSlamLog::info, "keyframe " << id << ": loop candidate " << candidate << ", " << v.matches
                                              << " ORB matches, " << v.guidedMatches << " guided, "
-                                             << v.estimate.inlierCount << " Sim(3) inliers"
-                                             << (verified ? " (accepted)" : " (rejected)"));
+                                             << v.estimate.inlierCount << " Sim(3) inliers (" << v.centralInliers
+                                             << " between the two)" << (verified ? " (accepted)" : " (rejected)"));
   if (!verified) {
     return false;
   }
@@ -211,7 +218,7 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
                          std::vector<std::pair<int, Sim3d>> &solution)
 {
   const GlobalKeyframe *g = map.find(loop.keyframe);
-  const bool ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopEdges, loop, solution);
+  const bool ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution);
   m_stats.corrected += ok ? 1 : 0;
   return ok;
 }
@@ -243,14 +250,14 @@ void LoopCloser::clear()
   m_database.clear();
   m_keyframes.clear();
   m_pending.clear();
-  m_loopEdges.clear();
+  m_loopConstraints.clear();
   m_segment = 0;
   newSegment();
 }
 
 double LoopCloser::memoryBytes() const
 {
-  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_keyframes) + vectorHeapBytes(m_loopEdges);
+  double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_keyframes) + vectorHeapBytes(m_loopConstraints);
   for (const auto &entry : m_keyframes) {
     bytes += entry.second.features.memoryBytes();
   }

@@ -33,6 +33,7 @@
 #include "loop/LoopDetector.h"
 #include "loop/LoopFeatures.h"
 #include "loop/LoopVerification.h"
+#include "loop/PoseGraph.h"
 #include "map/GlobalMap.h"
 #include "math/Sim3.h"
 
@@ -134,8 +135,9 @@ private:
   };
   bool query(int id, const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop);
   bool verifyCandidate(int id, int candidate, const GlobalMap &map, DetectedLoop &loop);
-  //! A side of the verification: \e id and its best co-visible keyframes that hold loop features.
-  std::vector<LoopSideKeyframe> side(int id, size_t neighbours, const GlobalMap &map) const;
+  //! A side of the verification: \e id and its best co-visible keyframes that hold loop features, not \e excluded.
+  std::vector<LoopSideKeyframe> side(int id, size_t neighbours, const GlobalMap &map,
+                                     const std::set<int> &excluded) const;
 
   vpHSlamParameters::Loop m_params;
   PinholeIntrinsics m_K;
@@ -145,10 +147,11 @@ private:
   std::map<int, Entry> m_keyframes;
   std::vector<int> m_pending; //!< handed over, not queried yet
   LoopConsistency m_consistency;
-  int m_segment = 0;                     //!< segment of the keyframes being queried
-  int m_keyframesInSegment = 0;          //!< handed over in this segment
-  int m_keyframeOfLastLoop = 0;          //!< m_keyframesInSegment at the last loop (or the segment's start)
-  std::vector<DetectedLoop> m_loopEdges; //!< every accepted loop, kept for the next corrections
+  int m_segment = 0;            //!< segment of the keyframes being queried
+  int m_keyframesInSegment = 0; //!< handed over in this segment
+  int m_keyframeOfLastLoop = 0; //!< m_keyframesInSegment at the last loop (or the segment's start)
+  //! Every corrected loop's edges (the measured one and its connections), kept for the next corrections.
+  std::vector<PoseGraphEdge> m_loopConstraints;
   LoopStatistics m_stats;
 };
 } // namespace hslam

@@ -7,8 +7,9 @@
 
   Vertices: every stored keyframe of the segment (free, at its stored pose with scale 1) and the window's keyframes
   (fixed: the window's priors tie them, and they hold the gauge). Edges, weighted alike: pose-pose edges between
-  stored keyframes or a stored and a window keyframe, strong co-visibility (kEssentialCovisibility shared points),
-  every loop accepted so far, and the new loop's connections: each keyframe of the querying side (the keyframe that
+  stored keyframes or a stored and a window keyframe (as the window measured them), strong co-visibility
+  (kEssentialCovisibility shared points, at today's relative poses), every edge of the loops corrected before,
+  and the new loop's connections: each keyframe of the querying side (the keyframe that
   closed the loop and the window) to the candidate and its best co-visible keyframes, through the measured similarity
   and each side's current relative poses, so that one edge does not have to bend the whole chain alone.
 
@@ -18,6 +19,7 @@
 #define HSLAM_LOOP_LOOP_CORRECTION_H
 
 #include "loop/LoopCloser.h"
+#include "loop/PoseGraph.h"
 
 #include <map>
 #include <utility>
@@ -26,12 +28,13 @@
 namespace hslam
 {
 /*!
-  Solve the pose graph of segment \e segment of \e map for \e loop (the last entry of \e loops, which holds every
-  accepted loop). \e solution receives (id, S_iw) for every stored keyframe of the segment outside the window.
-  False when the optimisation failed or gave a non-finite similarity (\e solution then empty).
+  Solve the pose graph of segment \e segment of \e map for \e loop. \e constraints holds the edges of the loops
+  corrected before; on success the new loop's edges are appended to it. \e solution receives (id, S_iw) for every stored
+  keyframe of the segment outside the window. False when the optimisation failed or gave a non-finite similarity (\e
+  solution then empty).
 */
 VISP_EXPORT bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
-                                     const std::vector<DetectedLoop> &loops, const DetectedLoop &loop,
+                                     std::vector<PoseGraphEdge> &constraints, const DetectedLoop &loop,
                                      std::vector<std::pair<int, Sim3d>> &solution);
 } // namespace hslam
 

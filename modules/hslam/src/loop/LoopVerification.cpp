@@ -167,12 +167,23 @@ LoopVerification verifyLoopSides(const std::vector<LoopSideKeyframe> &query,
   // Step 4: the similarity of all matches (the sampler starts again on a set that is mostly right).
   ransac.minInliers = options.minInliers;
   result.estimate = estimateSim3Ransac(correspondences(a, b, kept), K, K, ransac);
-  if (result.estimate.success) {
-    for (size_t k = 0; k < kept.size(); ++k) {
-      if (result.estimate.inliers[k]) {
-        result.inliers.push_back({a[static_cast<size_t>(kept[k].first)], b[static_cast<size_t>(kept[k].second)]});
-      }
+  if (!result.estimate.success) {
+    return result;
+  }
+  for (size_t k = 0; k < kept.size(); ++k) {
+    if (result.estimate.inliers[k]) {
+      const LoopPoint &pa = a[static_cast<size_t>(kept[k].first)], &pb = b[static_cast<size_t>(kept[k].second)];
+      result.inliers.push_back({pa, pb});
+      result.centralInliers +=
+          pa.keyframeId == query.front().features->id && pb.keyframeId == candidate.front().features->id ? 1 : 0;
     }
+  }
+  // The two ends themselves must see the place: a similarity supported by their neighbours only relates other
+  // keyframes through poses that are not measured here (synthetic room: 60 degrees apart, "closed" through their
+  // neighbours with a 4 degree error).
+  if (result.centralInliers < options.minInliers / 2) {
+    result.estimate.success = false;
+    result.inliers.clear();
   }
   return result;
 }

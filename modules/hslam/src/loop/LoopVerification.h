@@ -17,7 +17,9 @@
      reprojection in both images);
   3. guided matching: every B point mapped through that similarity into the query's camera is paired with the
      unmatched A point closest in descriptor within a radius (level-scaled) of its projection;
-  4. the similarity refined on all its matches, and the inliers counted again; accepted with minInliers.
+  4. the similarity refined on all its matches, and the inliers counted again; accepted with minInliers, of which
+     at least half between the query keyframe and the candidate themselves (the neighbours widen, they do not stand
+     in for the loop's two ends).
 
   Threading: pure functions (the RANSAC is seeded from the options: deterministic).
 */
@@ -46,7 +48,7 @@ struct LoopVerificationOptions {
   int maxDistance = 50;       //!< Hamming distance accepted at most
   double ratio = 0.75;        //!< best below ratio x second best
   int minMatches = 20;        //!< descriptor matches needed to try the Sim(3)
-  int minInliers = 20;        //!< inliers needed after refinement
+  int minInliers = 40;        //!< inliers needed after refinement (at least half between the two ends)
   double thresholdPx = 3.035; //!< inlier reprojection error in each image, pixels
   double guidedRadiusPx = 8.; //!< guided matching radius at level 0 (times 1.2^level), pixels
   unsigned int seed = 1;      //!< of the RANSAC sampler
@@ -54,9 +56,10 @@ struct LoopVerificationOptions {
 
 //! What verifyLoopSides() found.
 struct LoopVerification {
-  int matches = 0;       //!< descriptor matches of step 1
-  int guidedMatches = 0; //!< added by step 3
-  Sim3Estimate estimate; //!< S21 maps side B (candidate camera) into side A (query camera); success: accepted
+  int matches = 0;        //!< descriptor matches of step 1
+  int guidedMatches = 0;  //!< added by step 3
+  int centralInliers = 0; //!< inliers between the query keyframe itself and the candidate itself
+  Sim3Estimate estimate;  //!< S21 maps side B (candidate camera) into side A (query camera); success: accepted
   std::vector<LoopPointMatch> inliers; //!< the accepted similarity's inlier matches (windowSide = side A)
 };
 
