@@ -42,11 +42,17 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
   using Index = decltype(m_index);
   using Vectors = decltype(m_vectors);
   for (const BowEntry &e : bow) {
-    const auto inserted = m_index.try_emplace(e.wordId);
-    std::vector<KeyframeId> &holders = inserted.first->second;
-    const double before = vectorHeapBytes(holders);
-    holders.push_back(id);
-    m_heapBytes += vectorHeapBytes(holders) - before + (inserted.second ? hashNodeHeapBytes<Index>() : 0.);
+    std::uint32_t slot = m_freeHolders;
+    if (slot != kNoHolder) {
+      m_freeHolders = m_holders[slot].next;
+    } else {
+      slot = static_cast<std::uint32_t>(m_holders.size());
+      m_holders.push_back(Holder());
+    }
+    const auto inserted = m_index.try_emplace(e.wordId, kNoHolder);
+    m_holders[slot] = {id, inserted.first->second}; // in front of the word's chain
+    inserted.first->second = slot;
+    m_heapBytes += inserted.second ? hashNodeHeapBytes<Index>() : 0.;
   }
   const auto stored = m_vectors.emplace(id, bow).first;
   m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second);
@@ -64,10 +70,19 @@ bool KeyframeDatabase::remove(KeyframeId id)
     if (word == m_index.end()) {
       continue;
     }
-    std::vector<KeyframeId> &holders = word->second;
-    holders.erase(std::remove(holders.begin(), holders.end(), id), holders.end()); // the capacity stays
-    if (holders.empty()) {
-      m_heapBytes -= vectorHeapBytes(holders) + hashNodeHeapBytes<decltype(m_index)>();
+    // Unlink the keyframe's entry from the word's chain; it joins the free chain.
+    std::uint32_t *link = &word->second;
+    while (*link != kNoHolder && m_holders[*link].id != id) {
+      link = &m_holders[*link].next;
+    }
+    if (*link != kNoHolder) {
+      const std::uint32_t slot = *link;
+      *link = m_holders[slot].next;
+      m_holders[slot].next = m_freeHolders;
+      m_freeHolders = slot;
+    }
+    if (word->second == kNoHolder) {
+      m_heapBytes -= hashNodeHeapBytes<decltype(m_index)>();
       m_index.erase(word);
     }
   }
@@ -80,6 +95,8 @@ void KeyframeDatabase::clear()
 {
   std::unique_lock<std::shared_mutex> lock(m_mutex);
   m_index.clear();
+  std::vector<Holder>().swap(m_holders); // clear() would keep the capacity
+  m_freeHolders = kNoHolder;
   m_vectors.clear();
   m_heapBytes = 0.;
 }
@@ -130,8 +147,8 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     if (word == m_index.end()) {
       continue;
     }
-    for (KeyframeId id : word->second) {
-      ++common[id];
+    for (std::uint32_t h = word->second; h != kNoHolder; h = m_holders[h].next) {
+      ++common[m_holders[h].id];
     }
   }
   int maxCommon = 0;
@@ -223,6 +240,6 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
 double KeyframeDatabase::memoryBytes() const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  return m_heapBytes + hashBucketsHeapBytes(m_index) + hashBucketsHeapBytes(m_vectors);
+  return m_heapBytes + vectorHeapBytes(m_holders) + hashBucketsHeapBytes(m_index) + hashBucketsHeapBytes(m_vectors);
 }
 } // namespace hslam

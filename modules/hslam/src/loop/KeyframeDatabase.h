@@ -105,12 +105,23 @@ private:
   KeyframeDatabaseOptions m_options;
   mutable std::shared_mutex m_mutex;
   std::size_t m_wordCount = 0; //!< words of the vocabulary
-  //! Keyframes holding each word, for the words some keyframe holds (a map: one empty list per word of the shipped
-  //! vocabulary's 413,203 took 10 MB before the first keyframe).
-  std::unordered_map<std::uint32_t, std::vector<KeyframeId>> m_index;
+  //! The inverted index: for each word some keyframe holds, the first of its holders in m_holders (a map: one empty
+  //! list per word of the shipped vocabulary's 413,203 took 10 MB before the first keyframe). The holders of a word
+  //! are a chain through m_holders (one pool for all words): a word held by one keyframe, the common case, costs a
+  //! hash node and 8 bytes instead of a hash node and a vector (80 bytes a word and keyframe before: most of what a
+  //! stored keyframe's place recognition took).
+  std::unordered_map<std::uint32_t, std::uint32_t> m_index;
+  struct Holder {
+    KeyframeId id;
+    std::uint32_t next; //!< next holder of the same word in m_holders, kNoHolder at the end
+  };
+  static constexpr std::uint32_t kNoHolder = 0xffffffffu;
+  std::vector<Holder> m_holders;
+  std::uint32_t m_freeHolders = kNoHolder; //!< chain of the entries of m_holders freed by remove()
   std::unordered_map<KeyframeId, BowVector> m_vectors;
-  //! Heap bytes of the nodes and lists of m_index and m_vectors, kept up to date by add(), remove() and clear(), so
-  //! that memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5 words.
+  //! Heap bytes of the nodes of m_index and m_vectors and of the stored vectors, kept up to date by add(), remove() and
+  //! clear(), so that memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5
+  //! words.
   double m_heapBytes = 0.;
 };
 } // namespace hslam
