@@ -1,0 +1,170 @@
+// Loop closure at scale (issue 50): the two costs of loop closure that grow with the map, on maps of 1,000, 3,000 and
+// 10,000 stored keyframes built synthetically (no images: what is timed is the search and the graph, not the
+// keypoints, whose cost per keyframe does not depend on the map):
+//   - BM_LoopQuery: one keyframe's query of the keyframe database (the loop closer's rules: candidates not among its
+//     10 neighbours in time, co-visibility groups of 3 neighbours, floor at its lowest score with them). Each keyframe
+//     holds 500 words of the shipped vocabulary's 413,203, drawn as a run that goes round the same room: 250 places a
+//     lap, consecutive places sharing half their words, a revisit re-detecting 70 % of the place's words;
+//   - BM_LoopCorrection: solveLoopCorrection() on a chain of keyframes (pose-pose edges to the 2 previous ones, as the
+//     window leaves them), 7 window keyframes held, one loop from the newest stored keyframe back to the first.
+// Peak resident memory of the process is printed at the end (VmHWM). Labelled "benchmark": not run by CI.
+#include "loop/KeyframeDatabase.h"
+#include "loop/LoopCorrection.h"
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace
+{
+constexpr std::uint32_t kWords = 413203; // the shipped vocabulary
+constexpr int kWordsPerKeyframe = 500;
+constexpr int kPlacesPerLap = 250;
+constexpr int kWindow = 7;
+
+hslam::BowVector toBow(std::vector<std::uint32_t> words)
+{
+  std::sort(words.begin(), words.end());
+  words.erase(std::unique(words.begin(), words.end()), words.end());
+  hslam::BowVector bow;
+  for (std::uint32_t w : words) {
+    bow.push_back({w, 1. / static_cast<double>(words.size())});
+  }
+  return bow;
+}
+
+//! The database of \e n keyframes (see the file comment), built once per size.
+const hslam::KeyframeDatabase &database(int n)
+{
+  static std::map<int, std::unique_ptr<hslam::KeyframeDatabase>> made;
+  auto &db = made[n];
+  if (!db) {
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<std::uint32_t> word(0, kWords - 1);
+    std::vector<std::vector<std::uint32_t>> places(kPlacesPerLap);
+    for (int p = 0; p < kPlacesPerLap; ++p) {
+      for (int i = 0; i < kWordsPerKeyframe; ++i) { // the first half: the previous place's second half
+        const bool shared = p > 0 && i < kWordsPerKeyframe / 2;
+        places[static_cast<size_t>(p)].push_back(
+            shared ? places[static_cast<size_t>(p - 1)][static_cast<size_t>(i + kWordsPerKeyframe / 2)] : word(rng));
+      }
+    }
+    db = std::make_unique<hslam::KeyframeDatabase>(kWords);
+    for (int k = 0; k < n; ++k) {
+      std::vector<std::uint32_t> words = places[static_cast<size_t>(k % kPlacesPerLap)];
+      for (std::uint32_t &w : words) {
+        w = rng() % 10 < 3 ? word(rng) : w; // not re-detected: another word
+      }
+      db->add(k, toBow(words));
+    }
+  }
+  return *db;
+}
+
+void BM_LoopQuery(benchmark::State &state)
+{
+  const int n = static_cast<int>(state.range(0));
+  const hslam::KeyframeDatabase &db = database(n);
+  std::mt19937 rng(11);
+  size_t candidates = 0, queries = 0;
+  for (auto _ : state) {
+    const int id = 3 + static_cast<int>(rng() % static_cast<unsigned int>(n - 3));
+    hslam::BowVector bow;
+    db.vectorOf(id, bow);
+    const std::vector<double> scores = db.scoresWith(bow, {id - 1, id - 2, id - 3});
+    hslam::KeyframeDatabase::Query q;
+    q.minScore = *std::min_element(scores.begin(), scores.end());
+    q.excluded = [id](int c) { return std::abs(c - id) <= 10; };
+    q.covisible = [n](int c) {
+      std::vector<int> out;
+      for (int d = 1; d <= 3; ++d) {
+        for (int o : {c - d, c + d}) {
+          if (o >= 0 && o < n) {
+            out.push_back(o);
+          }
+        }
+      }
+      return out;
+    };
+    candidates += db.query(bow, q).size();
+    ++queries;
+  }
+  state.counters["candidates_per_query"] = static_cast<double>(candidates) / static_cast<double>(queries);
+  state.counters["database_MB"] = db.memoryBytes() / 1048576.;
+}
+BENCHMARK(BM_LoopQuery)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond);
+
+//! Camera \e k of a run round a circle of radius 2 (a lap every kPlacesPerLap keyframes), looking outward.
+hslam::SE3d cameraPose(int k, double drift)
+{
+  const double a = 2. * M_PI * k / kPlacesPerLap;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()));
+  const Eigen::Vector3d centre(2. * std::cos(a), 0., 2. * std::sin(a) + drift * k);
+  return hslam::SE3d(q, -(q * centre)); // cMw
+}
+
+void BM_LoopCorrection(benchmark::State &state)
+{
+  const int n = static_cast<int>(state.range(0));
+  hslam::GlobalMap map;
+  for (int k = 0; k < n; ++k) {
+    hslam::GlobalKeyframe g;
+    g.id = k;
+    g.cMw = cameraPose(k, 1e-4); // the odometry drifts
+    map.add(g);
+    for (int d = 1; d <= 2 && k - d >= 0; ++d) {
+      hslam::PosePoseEdge e;
+      e.from = k - d;
+      e.to = k;
+      e.toMfrom = cameraPose(k, 1e-4) * cameraPose(k - d, 1e-4).inverse();
+      map.addPosePoseEdge(e);
+    }
+  }
+  std::map<int, hslam::SE3d> window;
+  for (int k = n; k < n + kWindow; ++k) {
+    window[k] = cameraPose(k, 1e-4);
+    hslam::PosePoseEdge e;
+    e.from = k - 1;
+    e.to = k;
+    e.toMfrom = cameraPose(k, 1e-4) * cameraPose(k - 1, 1e-4).inverse();
+    map.addPosePoseEdge(e);
+  }
+  hslam::DetectedLoop loop;
+  loop.keyframe = n - 1;
+  loop.candidate = (n - 1) % kPlacesPerLap == 0 ? 0 : (n - 1) % kPlacesPerLap; // the same place on the first lap
+  loop.SkeyframeCandidate = hslam::Sim3d(cameraPose(n - 1, 0.) * cameraPose(loop.candidate, 0.).inverse(), 1.);
+  size_t moved = 0;
+  for (auto _ : state) {
+    std::vector<hslam::PoseGraphEdge> constraints;
+    std::vector<std::pair<int, hslam::Sim3d>> solution;
+    if (!hslam::solveLoopCorrection(map, 0, window, constraints, loop, solution)) {
+      state.SkipWithError("pose graph failed");
+      return;
+    }
+    moved = solution.size();
+  }
+  state.counters["keyframes_moved"] = static_cast<double>(moved);
+}
+BENCHMARK(BM_LoopCorrection)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+//! Peak resident memory, printed when the program ends.
+struct PeakMemory {
+  ~PeakMemory()
+  {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+      if (line.rfind("VmHWM:", 0) == 0) {
+        std::printf("peak resident memory (%s)\n", line.c_str());
+      }
+    }
+  }
+} peakMemory;
+} // namespace
