@@ -40,6 +40,11 @@ struct PinholeIntrinsics {
   {
     return Eigen::Vector3d((u - cx) / fx, (v - cy) / fy, 1.) / idepth;
   }
+  //! The pixel of point \e X of this camera's frame (its depth X.z() must be positive).
+  Eigen::Vector2d project(const Eigen::Vector3d &X) const
+  {
+    return Eigen::Vector2d(fx * X.x() / X.z() + cx, fy * X.y() / X.z() + cy);
+  }
 };
 
 //! One level: (I, dI/du, dI/dv) per pixel, row-major, plus squared gradient norm.

@@ -137,10 +137,8 @@ std::vector<double> KeyframeDatabase::scoresWith(const BowVector &bow, const std
   return scores;
 }
 
-std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector &bow, const Query &query) const
+std::unordered_map<KeyframeDatabase::KeyframeId, int> KeyframeDatabase::sharedWordCounts(const BowVector &bow) const
 {
-  std::shared_lock<std::shared_mutex> lock(m_mutex);
-  // 1. Keyframes sharing words, with the count of shared words.
   std::unordered_map<KeyframeId, int> common;
   for (const BowEntry &e : bow) {
     const auto word = m_index.find(e.wordId); // absent: no keyframe holds it (or another vocabulary's word)
@@ -151,6 +149,14 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
       ++common[m_holders[h].id];
     }
   }
+  return common;
+}
+
+std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector &bow, const Query &query) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  // 1. Keyframes sharing words, with the count of shared words.
+  std::unordered_map<KeyframeId, int> common = sharedWordCounts(bow);
   int maxCommon = 0;
   for (auto it = common.begin(); it != common.end();) {
     if (query.excluded && query.excluded(it->first)) {

@@ -102,6 +102,9 @@ public:
   std::vector<double> scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const;
 
 private:
+  //! For every keyframe sharing a word with \e bow, how many it shares (caller holds the lock).
+  std::unordered_map<KeyframeId, int> sharedWordCounts(const BowVector &bow) const;
+
   KeyframeDatabaseOptions m_options;
   mutable std::shared_mutex m_mutex;
   std::size_t m_wordCount = 0; //!< words of the vocabulary

@@ -49,7 +49,6 @@ void LoopCloser::addKeyframe(int id, int segment, const vpImage<unsigned char> &
   if (m_params.featuresPerKeyframe <= 0 || m_keyframes.count(id)) {
     return;
   }
-  const auto t0 = std::chrono::steady_clock::now();
   std::vector<OrbDescriptor> descriptors;
   Entry entry;
   entry.features = m_extractor.extract(id, image, samples, m_K, descriptors);
@@ -64,7 +63,6 @@ void LoopCloser::addKeyframe(int id, int segment, const vpImage<unsigned char> &
   }
   ++m_keyframesInSegment;
   m_pending.push_back(id);
-  m_stats.featuresMsTotal += msSince(t0);
 }
 
 bool LoopCloser::detect(const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop)
@@ -140,11 +138,11 @@ std::vector<LoopSideKeyframe> LoopCloser::side(int id, size_t neighbours, const 
   }
   out.push_back({&self->second.features, SE3d()});
   for (int n : map.covisibleWith(id)) {
-    const GlobalKeyframe *g = map.find(n);
-    const auto it = m_keyframes.find(n);
     if (out.size() > neighbours) {
       break;
     }
+    const GlobalKeyframe *g = map.find(n);
+    const auto it = m_keyframes.find(n);
     if (g && it != m_keyframes.end() && it->second.segment == self->second.segment && !excluded.count(n)) {
       out.push_back({&it->second.features, first->cMw * g->cMw.inverse()});
     }
@@ -262,11 +260,5 @@ double LoopCloser::memoryBytes() const
     bytes += entry.second.features.memoryBytes();
   }
   return bytes;
-}
-
-const LoopKeyframe *LoopCloser::features(int id) const
-{
-  const auto it = m_keyframes.find(id);
-  return it == m_keyframes.end() ? nullptr : &it->second.features;
 }
 } // namespace hslam

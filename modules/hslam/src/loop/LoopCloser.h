@@ -12,7 +12,8 @@
 
   What it is given: each keyframe that leaves the window (addKeyframe(): its image and the window's inverse depths,
   once they are final), and at detect() the global map (poses, co-visibility) with the keyframes the caller counts as
-  connected to the present (the window, what it sees and re-uses). A culled keyframe is removed (removeKeyframe()).
+  connected to the present (the window and the keyframes lending it re-used points). A culled keyframe is removed
+  (removeKeyframe()).
 
   What it hands back: detect() returns an accepted loop (the keyframe that asked, the candidate, the measured
   similarity), and correct() the corrected similarity of every stored keyframe of the segment (the window held
@@ -68,7 +69,6 @@ struct LoopStatistics {
   int detections = 0;              //!< keyframes checked for a loop (database queried)
   double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
   double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
-  double featuresMsTotal = 0.;     //!< wall time of the loop features (ORB, depths, BoW) of every stored keyframe
   int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
   int globalBaApplied = 0;         //!< ... and written back
   double globalBaSecondsMax = 0.;  //!< longest of them, wall time, seconds
@@ -122,9 +122,6 @@ public:
 
   //! Bytes held: the loop features, the database and the loop edges.
   double memoryBytes() const;
-  //! Stored keyframes with loop features.
-  size_t size() const { return m_keyframes.size(); }
-  const LoopKeyframe *features(int id) const;
   LoopStatistics &statistics() { return m_stats; }
   const LoopStatistics &statistics() const { return m_stats; }
 

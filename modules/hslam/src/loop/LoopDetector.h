@@ -26,6 +26,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <set>
 #include <utility>
 #include <vector>
@@ -54,14 +55,15 @@ struct LoopPoint {
   Eigen::Vector3d X = Eigen::Vector3d::Zero();
   Eigen::Vector2d uv = Eigen::Vector2d::Zero();
   OrbDescriptor orb;
-  int keyframeId = -1;   //!< the point's host (window or stored keyframe)
-  size_t pointIndex = 0; //!< its index among the host's points
+  int keyframeId = -1;     //!< the point's host (window or stored keyframe)
+  size_t pointIndex = 0;   //!< its index among the host's points
+  std::uint8_t octave = 0; //!< pyramid level it was detected at (0: level 0, or not a keypoint)
 };
 
-//! A verified loop match (a Sim(3) inlier): the same point seen from both sides, for fusing them (loop fusion).
+//! A verified loop match (a Sim(3) inlier): the same point seen from both ends of the loop.
 struct LoopPointMatch {
-  LoopPoint windowSide; //!< uv: in the keyframe that closed the loop
-  LoopPoint storedSide; //!< uv: in the candidate keyframe
+  LoopPoint querySide;     //!< X, uv: in the keyframe that closed the loop
+  LoopPoint candidateSide; //!< X, uv: in the candidate keyframe
 };
 
 //! Index pairs (into a, into b) of the ORB matches (see file comment).

@@ -14,57 +14,73 @@ namespace
 //! Scale between ORB pyramid levels (OrbExtractorOptions::scaleFactor): a keypoint's pixel noise grows with it.
 constexpr double kLevelScale = 1.2;
 
-//! Every point of a side in the camera of its first keyframe; those behind that camera are left out.
-std::vector<LoopPoint> sidePoints(const std::vector<LoopSideKeyframe> &side, const PinholeIntrinsics &K,
-                                  std::vector<size_t> &keyframeBegin, std::vector<std::uint8_t> &octave)
+//! Every point of a side in the camera of its first keyframe, keyframe by keyframe (those behind that camera are left
+//! out): a side's points are the concatenation of these slices.
+std::vector<std::vector<LoopPoint>> sidePoints(const std::vector<LoopSideKeyframe> &side, const PinholeIntrinsics &K)
 {
-  std::vector<LoopPoint> points;
-  keyframeBegin.clear();
-  octave.clear();
+  std::vector<std::vector<LoopPoint>> slices;
   for (const LoopSideKeyframe &kf : side) {
-    keyframeBegin.push_back(points.size());
     const LoopKeyframe &f = *kf.features;
+    std::vector<LoopPoint> &points = slices.emplace_back();
     for (size_t i = 0; i < f.X.size(); ++i) {
       LoopPoint p;
       p.X = kf.sideMkeyframe * Eigen::Vector3d(f.X[i].cast<double>());
       if (!(p.X.z() > 0.)) {
         continue;
       }
-      p.uv = Eigen::Vector2d(K.fx * p.X.x() / p.X.z() + K.cx, K.fy * p.X.y() / p.X.z() + K.cy);
+      p.uv = K.project(p.X);
       p.orb = f.orb[i];
       p.keyframeId = f.id;
       p.pointIndex = i;
+      p.octave = i < f.octave.size() ? f.octave[i] : 0;
       points.push_back(p);
-      octave.push_back(i < f.octave.size() ? f.octave[i] : 0);
     }
   }
-  keyframeBegin.push_back(points.size());
-  return points;
+  return slices;
 }
 
-//! Step 1: keyframe by keyframe matches, each point at most once (closest pair first). Pairs (index in a, in b).
-std::vector<std::pair<int, int>> matchSides(const std::vector<LoopPoint> &a, const std::vector<size_t> &aBegin,
-                                            const std::vector<LoopPoint> &b, const std::vector<size_t> &bBegin,
+//! All the points of a side's slices, one after the other.
+std::vector<LoopPoint> concatenate(const std::vector<std::vector<LoopPoint>> &slices)
+{
+  std::vector<LoopPoint> all;
+  for (const std::vector<LoopPoint> &slice : slices) {
+    all.insert(all.end(), slice.begin(), slice.end());
+  }
+  return all;
+}
+
+//! Where each slice starts in the concatenated side, and (last entry) the side's size.
+std::vector<size_t> sliceBegins(const std::vector<std::vector<LoopPoint>> &slices)
+{
+  std::vector<size_t> begins = {0};
+  for (const std::vector<LoopPoint> &slice : slices) {
+    begins.push_back(begins.back() + slice.size());
+  }
+  return begins;
+}
+
+//! Step 1: keyframe by keyframe matches, each point at most once (closest pair first). Pairs of indices into the
+//! concatenated sides.
+std::vector<std::pair<int, int>> matchSides(const std::vector<std::vector<LoopPoint>> &a,
+                                            const std::vector<std::vector<LoopPoint>> &b,
                                             const LoopVerificationOptions &o)
 {
   struct Pair {
     int distance, ia, ib;
   };
+  const std::vector<size_t> beginA = sliceBegins(a), beginB = sliceBegins(b);
   std::vector<Pair> pairs;
-  for (size_t ka = 0; ka + 1 < aBegin.size(); ++ka) {
-    const std::vector<LoopPoint> sa(a.begin() + static_cast<long>(aBegin[ka]),
-                                    a.begin() + static_cast<long>(aBegin[ka + 1]));
-    for (size_t kb = 0; kb + 1 < bBegin.size(); ++kb) {
-      const std::vector<LoopPoint> sb(b.begin() + static_cast<long>(bBegin[kb]),
-                                      b.begin() + static_cast<long>(bBegin[kb + 1]));
-      for (const auto &m : matchLoopPoints(sa, sb, o.maxDistance, o.ratio)) {
-        const int ia = static_cast<int>(aBegin[ka]) + m.first, ib = static_cast<int>(bBegin[kb]) + m.second;
-        pairs.push_back({hammingDistance(a[static_cast<size_t>(ia)].orb, b[static_cast<size_t>(ib)].orb), ia, ib});
+  for (size_t ka = 0; ka < a.size(); ++ka) {
+    for (size_t kb = 0; kb < b.size(); ++kb) {
+      for (const auto &m : matchLoopPoints(a[ka], b[kb], o.maxDistance, o.ratio)) {
+        const LoopPoint &pa = a[ka][static_cast<size_t>(m.first)], &pb = b[kb][static_cast<size_t>(m.second)];
+        pairs.push_back({hammingDistance(pa.orb, pb.orb), static_cast<int>(beginA[ka]) + m.first,
+                         static_cast<int>(beginB[kb]) + m.second});
       }
     }
   }
   std::stable_sort(pairs.begin(), pairs.end(), [](const Pair &x, const Pair &y) { return x.distance < y.distance; });
-  std::vector<bool> usedA(a.size(), false), usedB(b.size(), false);
+  std::vector<bool> usedA(beginA.back(), false), usedB(beginB.back(), false);
   std::vector<std::pair<int, int>> out;
   for (const Pair &p : pairs) {
     if (!usedA[static_cast<size_t>(p.ia)] && !usedB[static_cast<size_t>(p.ib)]) {
@@ -77,9 +93,8 @@ std::vector<std::pair<int, int>> matchSides(const std::vector<LoopPoint> &a, con
 
 //! Step 3: B points mapped by S21 into A's camera, each paired with the closest unmatched A point in descriptor
 //! within the radius of its projection (and in front). Appends to \e pairs; returns how many were added.
-int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<std::uint8_t> &aOctave,
-                  const std::vector<LoopPoint> &b, const Sim3d &S21, const PinholeIntrinsics &K,
-                  const LoopVerificationOptions &o, std::vector<std::pair<int, int>> &pairs)
+int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<LoopPoint> &b, const Sim3d &S21,
+                  const PinholeIntrinsics &K, const LoopVerificationOptions &o, std::vector<std::pair<int, int>> &pairs)
 {
   std::vector<bool> usedA(a.size(), false), usedB(b.size(), false);
   for (const auto &p : pairs) {
@@ -94,10 +109,10 @@ int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<std::uint8_
     if (!(X2.z() > 0.)) {
       continue;
     }
-    const Eigen::Vector2d uv(K.fx * X2.x() / X2.z() + K.cx, K.fy * X2.y() / X2.z() + K.cy);
+    const Eigen::Vector2d uv = K.project(X2);
     int best = o.maxDistance + 1, bestIndex = -1;
     for (size_t i = 0; i < a.size(); ++i) {
-      const double radius = o.guidedRadiusPx * std::pow(kLevelScale, aOctave[i]);
+      const double radius = o.guidedRadiusPx * std::pow(kLevelScale, a[i].octave);
       if (usedA[i] || (a[i].uv - uv).squaredNorm() > radius * radius) {
         continue;
       }
@@ -137,11 +152,9 @@ LoopVerification verifyLoopSides(const std::vector<LoopSideKeyframe> &query,
   if (query.empty() || candidate.empty()) {
     return result;
   }
-  std::vector<size_t> aBegin, bBegin;
-  std::vector<std::uint8_t> aOctave, bOctave;
-  const std::vector<LoopPoint> a = sidePoints(query, K, aBegin, aOctave);
-  const std::vector<LoopPoint> b = sidePoints(candidate, K, bBegin, bOctave);
-  std::vector<std::pair<int, int>> pairs = matchSides(a, aBegin, b, bBegin, options);
+  const std::vector<std::vector<LoopPoint>> sliceA = sidePoints(query, K), sliceB = sidePoints(candidate, K);
+  const std::vector<LoopPoint> a = concatenate(sliceA), b = concatenate(sliceB);
+  std::vector<std::pair<int, int>> pairs = matchSides(sliceA, sliceB, options);
   result.matches = static_cast<int>(pairs.size());
   if (result.matches < options.minMatches) {
     return result;
@@ -163,7 +176,7 @@ LoopVerification verifyLoopSides(const std::vector<LoopSideKeyframe> &query,
       kept.push_back(pairs[k]);
     }
   }
-  result.guidedMatches = guidedMatches(a, aOctave, b, hypothesis.S21, K, options, kept);
+  result.guidedMatches = guidedMatches(a, b, hypothesis.S21, K, options, kept);
   // Step 4: the similarity of all matches (the sampler starts again on a set that is mostly right).
   ransac.minInliers = options.minInliers;
   result.estimate = estimateSim3Ransac(correspondences(a, b, kept), K, K, ransac);

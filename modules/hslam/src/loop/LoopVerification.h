@@ -60,7 +60,7 @@ struct LoopVerification {
   int guidedMatches = 0;  //!< added by step 3
   int centralInliers = 0; //!< inliers between the query keyframe itself and the candidate itself
   Sim3Estimate estimate;  //!< S21 maps side B (candidate camera) into side A (query camera); success: accepted
-  std::vector<LoopPointMatch> inliers; //!< the accepted similarity's inlier matches (windowSide = side A)
+  std::vector<LoopPointMatch> inliers; //!< the accepted similarity's inlier matches
 };
 
 /*!

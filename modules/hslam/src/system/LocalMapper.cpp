@@ -15,9 +15,8 @@
 #include "tracking/CoarseTracker.h"
 #include "tracking/RelocalizationIndex.h"
 
-#include <visp3/hslam/vpHSlamLog.h>
-
 #include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamLog.h>
 
 #include <algorithm>
 #include <chrono>
@@ -594,7 +593,8 @@ void LocalMapper::handOverToLoopCloser(const Keyframe &kf)
       }
       const Eigen::Vector3d X = own ? K.unproject(p.u, p.v, p.idepth) : kMh * K.unproject(p.u, p.v, p.idepth);
       if (X.z() > 0.) {
-        samples.push_back({K.fx * X.x() / X.z() + K.cx, K.fy * X.y() / X.z() + K.cy, 1. / X.z()});
+        const Eigen::Vector2d uv = K.project(X);
+        samples.push_back({uv.x(), uv.y(), 1. / X.z()});
       }
     }
   }

@@ -290,7 +290,8 @@ private:
   GlobalMap m_globalMap; //!< outlives segments (clear() keeps it)
   int m_segment = 0;     //!< segment of the keyframes being made
   ReuseStatistics m_reuse;
-  //! Loop closure (slam mode with a vocabulary); outlives segments like the global map (clear() starts a segment).
+  //! Loop closure (slam mode with a vocabulary). clear() empties it (loops stay within a segment); its statistics
+  //! count the whole run until reset().
   std::unique_ptr<LoopCloser> m_loop;
   std::atomic<bool> m_correctingLoop{false};
 };
