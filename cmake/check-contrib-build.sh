@@ -18,7 +18,7 @@ mkdir -p "$work"
 if [ ! -d "$work/visp-3.5.0" ]; then
   if ! grep -rqs "^Types:.*deb-src" /etc/apt/sources.list.d/ && ! grep -qs "^deb-src" /etc/apt/sources.list; then
     if [ "$(id -u)" -ne 0 ]; then
-      echo "no deb-src entry for bookworm: add one (see README) or run as root" >&2
+      echo "no deb-src entry for bookworm: add one (see docs/running.md) or run as root" >&2
       exit 1
     fi
     cat >/etc/apt/sources.list.d/hslam-debian-src.sources <<'SRC'

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sanitizer passes of `bash cmake/run.sh test` (called by it after the normal suite; see README.md, "Reliability"):
+# Sanitizer passes of `bash cmake/run.sh test` (called by it after the normal suite; see docs/reliability.md):
 #   1. AddressSanitizer + UndefinedBehaviorSanitizer build in BUILD-asan, the ctest suite without benchmarks and
 #      without the longest system tests (listed below with the shorter tests that drive the same code);
 #   2. ThreadSanitizer build in BUILD-tsan of the programs that run threads, their threaded tests;

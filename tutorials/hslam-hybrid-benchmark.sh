@@ -38,7 +38,8 @@ if [[ $# -ge 1 && "$1" != "--" ]]; then
   shift
 fi
 if [[ "${1:-}" == "--" ]]; then shift; fi
-# The README's tables were measured in vo-strict mode (the program's default then); MAP_MODE=slam for the default.
+# The tables of docs/hybrid-tracking.md were measured in vo-strict mode (the program's default then); MAP_MODE=slam
+# for the default.
 extra=(--mode "${MAP_MODE:-vo-strict}" "$@")
 data="${DATA:-$repo/../shared/data}"
 out="${OUT:-/tmp/hslam-hybrid-bench}"

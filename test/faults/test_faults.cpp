@@ -1,4 +1,4 @@
-// Injected faults on a running system (issue 11): each fault below has the outcome documented in README.md
+// Injected faults on a running system (issue 11): each fault below has the outcome documented in docs/reliability.md
 // ("Faults and their outcome") and checked here, in deterministic and in real-time mode (mapping thread):
 // timestamps repeated, going backwards or not finite, an image of another size mid-stream, all-black, all-white and
 // pure-noise frames, NaN, infinite, zero or negative exposure, a source that throws midway, and a camera file that

@@ -303,7 +303,7 @@ TEST(WindowOptimizer, PairInformationLinksKeyframesSharingResiduals)
 TEST(WindowOptimizer, MarginalizationDecision)
 {
   Window w(8, 40);
-  w.scene.params.mapper.windowSize = 7; // the paper's window, pinned: the default is 6 (README, "Modes")
+  w.scene.params.mapper.windowSize = 7; // the paper's window, pinned: the default is 6 (docs/accuracy-and-speed.md)
   w.scene.params.mapper.minWindowSize = 5;
   WindowOptimizer opt(w.scene.params);
   w.addAll(opt);

@@ -69,7 +69,7 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
       EXPECT_GT(s.loopVerificationMsMax, 0.);
       EXPECT_GE(s.loopCorrectionMsMax, s.lastLoopCorrectionMs);
       EXPECT_GT(s.lastLoopCorrectionMs, 0.);
-      EXPECT_EQ(s.globalBundleAdjustments, 0u); // off by default (README, "Global map and loop closure")
+      EXPECT_EQ(s.globalBundleAdjustments, 0u); // off by default (docs/global-map-and-loops.md)
       // No frame far off: the frames before the initialisation, tracked backwards while the camera turned away
       // from the map, stop where the map leaves the view (they went 0.4 m wrong, 40x the run's RMSE, before that
       // check). Relative to the run's RMSE: since the initialisation's check allows for image noise the run
@@ -106,7 +106,8 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
   EXPECT_GE(runsWithLoop, 2);
   // Issue 10's bar: slam at least 3x better than vo-strict (medians; 3.5x measured on these five runs: 0.015 /
   // 0.017 / 0.028 / 0.039 / 0.019 m against 0.069 / 0.055 / 0.067 / 0.030 / 0.339 m; 3.4x over the 11 budgets
-  // 475..525 of the README's benchmark). Three budgets are too few: 490 / 500 / 510 alone give 2.0x.
+  // 475..525 of the benchmark in docs/global-map-and-loops.md). Three budgets are too few: 490 / 500 / 510 alone
+  // give 2.0x.
   EXPECT_LT(3. * slamAte[2], strictAte[2]);
   EXPECT_LT(slamAte[2], 0.05);
 }

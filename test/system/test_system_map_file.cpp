@@ -224,8 +224,8 @@ TEST_F(SystemMapFile, LocalizationOnlyTracksEveryFrameInTheLoadedMapWithoutChang
   EXPECT_EQ(s.segments, 0u); // nothing initialised
   // Poses from ORB matches to the map jointly with the photometric alignment to the last located frame (its depths
   // from the map): measured 3.6 mm against 1.0 mm for the mapping run here (4.5 mm with ORB and PnP alone); on the
-  // shared sequences within 10 % of the mapping run or better (README). Bound: the one the global map test sets for
-  // vo-reuse itself on this scene.
+  // shared sequences within 10 % of the mapping run or better (docs/map-files.md). Bound: the one the global map
+  // test sets for vo-reuse itself on this scene.
   EXPECT_LT(localizationAte, 0.01);
   // The map is not changed: saved again, it is the same file byte for byte.
   localization.saveMap(path("after.hmap"));

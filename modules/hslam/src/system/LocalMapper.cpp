@@ -134,8 +134,8 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
   // Gradient pixels only among the first keyframe's initial points with direct and hybrid tracking (descriptors
   // are still computed). Corners here, high-contrast, first raised the RMSE of DSO's check of the first windows
   // (7scenes_redkitchen_000-299 fed every 6th frame: three correct initialisations in a row refused), and they made
-  // five synthetic system tests worse (a two-lap loop 0.027 against 0.019 m median; README, "Corners of the first
-  // keyframe"). Indirect tracking has nothing else to follow, so it gets its corners from the start.
+  // five synthetic system tests worse (a two-lap loop 0.027 against 0.019 m median; docs/map-files.md, "Corners of
+  // the first keyframe"). Indirect tracking has nothing else to follow, so it gets its corners from the start.
   const bool cornersFirst = m.params.tracking.mode == vpHSlamParameters::trackingIndirect;
   m.selector.select(first->raw, first->pyramid, m.params.features.desiredPointDensity,
                     static_cast<unsigned int>(first->id) + kSelectionSeedOffset, m.selected, m.selectedCorner,
@@ -216,7 +216,8 @@ bool LocalMapper::initialize(const FramePtr &first, int firstKeyframeId, const F
     // and that go into the global map with the keyframe when their depth has converged (marginalize()). Without
     // them its descriptors all sat on edge pixels, which a returning camera's FAST corners rarely meet: a
     // real-time map was relocalised at its start with 21-23 PnP inliers (30 needed) in 8 of 19 runs. Activated like
-    // any keyframe's corners they made three synthetic system tests fail (README, "Corners of the first keyframe").
+    // any keyframe's corners they made three synthetic system tests fail (docs/map-files.md, "Corners of the first
+    // keyframe").
     makeNewImmaturePoints(*kf0, /*cornersOnly=*/true);
     for (ImmaturePoint &pt : kf0->immature) {
       pt.descriptorOnly = true;
@@ -273,7 +274,7 @@ void LocalMapper::makeKeyframe(const FramePtr &frame, int keyframeId, int seedKe
   finishKeyframe(kf, seedKeyframe);
   if (m.relocalization) {
     // The keyframe's bag-of-words vector: every selected point's descriptor (from its corners alone the synthetic
-    // loop's loops were found less often; README, "Hybrid tracking").
+    // loop's loops were found less often; docs/hybrid-tracking.md).
     std::vector<OrbDescriptor> descriptors;
     descriptors.reserve(kf->immature.size());
     for (const ImmaturePoint &pt : kf->immature) {

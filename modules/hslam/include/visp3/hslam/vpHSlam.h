@@ -71,7 +71,7 @@ class SlamSystem;
 
   Settings: the vpHSlamParameters defaults run the whole SLAM system (mode slam: global map, loop closure,
   relocalisation) with fewer points and keyframes than DSO and a 6-keyframe window, about 3x to 6x real time on one
-  core on the shared 640x480 sequences (README, "Defaults"); data/hslam-dso.yaml has DSO's settings.
+  core on the shared 640x480 sequences (docs/accuracy-and-speed.md, "Defaults"); data/hslam-dso.yaml has DSO's settings.
 
   \code
   std::unique_ptr<vpHSlamImageSource> source = vpHSlamImageSource::create("../shared/data/tsukuba_cg_000-149");

@@ -20,7 +20,7 @@
   \brief All settings of H-SLAM: one struct per component (features, tracker, mapper, initializer, tracking, globalMap,
   system), each field documented with its unit and a default taken from DSO (direct part) or ORB-SLAM2 (indirect part)
   unless noted. The defaults run the whole system (mode slam) with fewer points, iterations and keyframes than DSO,
-  the trade-off measured in README, "Defaults"; data/hslam-dso.yaml restores DSO's values.
+  the trade-off measured in docs/accuracy-and-speed.md, "Defaults"; data/hslam-dso.yaml restores DSO's values.
 
   What it is for: no threshold lives in algorithm code; everything a user may tune is here, can be written to and
   read from YAML (cv::FileStorage format, one section per component), and printed. Fields absent from a YAML file
@@ -59,8 +59,8 @@ public:
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
   struct Features {
-    int desiredPointDensity = 600;    //!< target number of active points in the window (DSO 2000; README, "Defaults")
-    int desiredImmatureDensity = 500; //!< candidates selected per new keyframe (DSO 1500; README, "Defaults")
+    int desiredPointDensity = 600;    //!< active points the window aims at (DSO 2000; docs/accuracy-and-speed.md)
+    int desiredImmatureDensity = 500; //!< candidates selected per new keyframe (DSO 1500; docs/accuracy-and-speed.md)
     int selectionBlockSize = 32;      //!< side of the blocks of the region-adaptive gradient threshold, pixels
     double gradientThresholdAdd = 7.; //!< threshold = block median of |grad| + this, intensity units (DSO)
     double gradientThresholdLevelFactor = 0.75; //!< threshold multiplier per coarser selection level (DSO)
@@ -120,7 +120,7 @@ public:
     //! the newest keyframe moves a point at the window's median depth by less than this (pixels at 640 px width,
     //! scaled with the image width) is kept, when its residuals agree and the window has fewer than
     //! features.desiredPointDensity points, on a weak prior at that median inverse depth (0: never; DSO drops such
-    //! candidates, and a turn in place empties its window; README, "Defaults", for the value)
+    //! candidates, and a turn in place empties its window; docs/accuracy-and-speed.md, "Defaults", for the value)
     double rotationFlowPx = 4.;
   };
 
@@ -138,8 +138,9 @@ public:
   /*!
     Hybrid pose tracking: descriptor sharing, ORB matching of the map into the new frame, joint photometric and
     geometric optimisation, relocalisation (paper sections 3.1, 3.2). Matching defaults are ORB-SLAM2's tracking
-    values; the others were measured on the shared sequences (README, "Hybrid tracking").
-    The default tracking mode is direct: measured on the shared sequences (README, tutorials/hslam-hybrid-benchmark.sh),
+    values; the others were measured on the shared sequences (docs/hybrid-tracking.md).
+    The default tracking mode is direct: measured on the shared sequences (docs/hybrid-tracking.md,
+    tutorials/hslam-hybrid-benchmark.sh),
     hybrid is not yet as accurate as direct nor more robust to large motion, so it is not what users get until it
     is. Relocalisation needs hybrid or indirect tracking (descriptors).
   */
@@ -153,7 +154,7 @@ public:
     int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
     int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
     //! Paper eq. 3: weigh each match of the joint optimisation by its point's inverse-depth information over the
-    //! largest (hybrid tracking). Off: measured no better than equal weights (README, "Hybrid tracking")
+    //! largest (hybrid tracking). Off: measured no better than equal weights (docs/hybrid-tracking.md)
     bool geometricDepthWeights = false;
     bool relocalize = true; //!< when tracking fails, relocalise in the same map before a new segment (hybrid or
                             //!< indirect tracking, or any tracking in vo-reuse and slam: it needs the keyframe
@@ -189,10 +190,10 @@ public:
     int reuseMaxKeyframes = 10;      //!< stored keyframes searched per new keyframe (most overlapping first)
     double fusionSigmas = 2.;        //!< late fusion: projected depth within this many standard deviations
     bool reuse = true;               //!< re-use global points in the window (off: the map is kept, not re-used)
-    double priorVarianceScale = 10.; //!< re-used depth variances times this (> 1: trust less; measured, README)
+    double priorVarianceScale = 10.; //!< re-used depth variance factor (> 1: trust less; docs/global-map-and-loops.md)
     //! A re-used point is measured against its stored keyframe in the window (held fixed), which ties the window to
     //! the stored map (off: only an inverse-depth prior in its new host). Off by default: it registers later laps
-    //! onto the first, but lost tracking more often (README, "Global map and loop closure").
+    //! onto the first, but lost tracking more often (docs/global-map-and-loops.md).
     bool anchors = false;
     double anchorPixelWeight = 100.; //!< anchor energy per squared pixel, window units (grey levels squared)
     double anchorHuberPx = 2.;       //!< Huber threshold of an anchor's pixel residual
@@ -220,7 +221,7 @@ public:
     int featuresPerKeyframe = 500;
     //! After a loop's pose graph, refine stored poses and depths (background). Off by default: its measurements are
     //! the window's own projections at marginalisation, so it adds little the pose graph has not used and partly
-    //! undoes the correction (measured: README, "Global map and loop closure").
+    //! undoes the correction (measured: docs/global-map-and-loops.md).
     bool globalBundleAdjustment = false;
     int globalBaIterations = 10;         //!< Levenberg-Marquardt iterations of the global bundle adjustment
     double globalBaHuberPx = 2.;         //!< Huber threshold of its reprojection errors, pixels
@@ -229,7 +230,7 @@ public:
 
   //! System-wide behaviour.
   struct System {
-    Mode mode = modeSlam;                  //!< see Mode (README, "Defaults": why slam)
+    Mode mode = modeSlam;                  //!< see Mode (docs/accuracy-and-speed.md, "Defaults": why slam)
     bool deterministic = false;            //!< map in the caller's thread: identical output run to run
     int workerThreads = 0;                 //!< threads for residual accumulation (0 = off, run in the caller)
     bool usePhotometricCalibration = true; //!< use G, V, exposure when the source has them
