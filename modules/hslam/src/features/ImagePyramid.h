@@ -30,6 +30,10 @@
 
 namespace hslam
 {
+//! Image width at which pixel thresholds are given (globalMap.reuseRadiusPx, mapper.rotationFlowPx); other widths
+//! scale them.
+constexpr double kReferenceWidthPx = 640.;
+
 //! Pinhole intrinsics of one pyramid level, pixels.
 struct PinholeIntrinsics {
   double fx = 1., fy = 1., cx = 0., cy = 0.;

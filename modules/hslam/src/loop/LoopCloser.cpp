@@ -216,9 +216,78 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
                          std::vector<std::pair<int, Sim3d>> &solution)
 {
   const GlobalKeyframe *g = map.find(loop.keyframe);
-  const bool ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution);
+  bool ok = false;
+  try {
+    ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution);
+  } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
+    VP_HSLAM_LOG(vpHSlamLog::warning,
+                 "loop " << loop.keyframe << "-" << loop.candidate << ": " << e.getStringMessage());
+  }
+  if (!ok) {
+    VP_HSLAM_LOG(vpHSlamLog::warning, "loop " << loop.keyframe << "-" << loop.candidate << " not corrected");
+  }
   m_stats.corrected += ok ? 1 : 0;
   return ok;
+}
+
+void LoopCloser::addKeyframe(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window)
+{
+  // Depth samples: the keyframe's own points (final now) and the window's active points seen from it.
+  std::vector<IdepthSample> samples;
+  for (const KeyframePtr &host : window) {
+    const bool own = host.get() == &kf;
+    const SE3d kMh = kf.frame->cMw * host->frame->cMw.inverse();
+    for (const MapPoint &p : host->points) {
+      const bool usable = p.status == PointStatus::active || (own && p.status == PointStatus::marginalized);
+      if (!usable || !(p.idepth > 0.) || p.depthFromPrior) {
+        continue;
+      }
+      const Eigen::Vector3d X = own ? m_K.unproject(p.u, p.v, p.idepth) : kMh * m_K.unproject(p.u, p.v, p.idepth);
+      if (X.z() > 0.) {
+        const Eigen::Vector2d uv = m_K.project(X);
+        samples.push_back({uv.x(), uv.y(), 1. / X.z()});
+      }
+    }
+  }
+  addKeyframe(kf.id(), segment, kf.frame->raw, samples);
+}
+
+std::set<int> LoopCloser::connectedTo(const std::vector<KeyframePtr> &window)
+{
+  // Not the window's co-visible keyframes: the query is a stored keyframe now, and a keyframe DSO keeps in the window
+  // for long (it still sees most of its points) is co-visible with a whole pass; with them, every keyframe of the
+  // outward pass was excluded on 7-Scenes played there and back. The query's own co-visible ones are excluded by
+  // the loop closer.
+  std::set<int> connected;
+  for (const KeyframePtr &kf : window) {
+    connected.insert(kf->id());
+    // Keyframes whose points the window re-uses now are connected (their co-visibility is only counted once those
+    // points leave the window again): re-use has already joined them to the present, no loop is needed there.
+    for (const MapPoint &pt : kf->points) {
+      if (pt.status == PointStatus::active && pt.fromGlobalMap) {
+        connected.insert(pt.observers.begin(), pt.observers.end());
+      }
+    }
+  }
+  return connected;
+}
+
+std::unique_ptr<GlobalBundleJob> LoopCloser::makeGlobalBundleJob(const GlobalMap &map, int segment,
+                                                                 const std::map<int, SE3d> &windowPoses)
+{
+  GlobalBundleOptions options;
+  options.maxIterations = m_params.globalBaIterations;
+  options.huberPx = m_params.globalBaHuberPx;
+  ++m_stats.globalBaStarted;
+  return hslam::makeGlobalBundleJob(map, segment, windowPoses, m_K, options, m_params.globalBaPointsPerKeyframe);
+}
+
+std::unique_ptr<GlobalBundleJob> LoopCloser::takeBackgroundJob(bool wait)
+{
+  if (!m_globalBa.running() || (!wait && !m_globalBa.finished())) {
+    return nullptr;
+  }
+  return m_globalBa.take();
 }
 
 void LoopCloser::rescale(int id, double scale)
@@ -245,6 +314,7 @@ void LoopCloser::newSegment()
 
 void LoopCloser::clear()
 {
+  m_globalBa.cancel();
   m_database.clear();
   m_keyframes.clear();
   m_pending.clear();

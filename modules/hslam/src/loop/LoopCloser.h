@@ -26,22 +26,27 @@
   than loop.maxRotationCorrectionDeg is refused (aliasing).
 
   Threading: not thread-safe; the mapping thread owns it (detection and correction run there, after the keyframe).
+  In real time the global bundle adjustment after a correction runs on a thread of its own (runInBackground()),
+  on a copy of the map; the mapping thread collects it (takeBackgroundJob()).
 */
 #ifndef HSLAM_LOOP_LOOP_CLOSER_H
 #define HSLAM_LOOP_LOOP_CLOSER_H
 
+#include "loop/GlobalBundleJob.h"
 #include "loop/KeyframeDatabase.h"
 #include "loop/LoopDetector.h"
 #include "loop/LoopFeatures.h"
 #include "loop/LoopVerification.h"
 #include "loop/PoseGraph.h"
 #include "map/GlobalMap.h"
+#include "map/Keyframe.h"
 #include "math/Sim3.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <map>
+#include <memory>
 #include <set>
 #include <vector>
 
@@ -95,6 +100,16 @@ public:
     detect(). \e segment: its map segment.
   */
   void addKeyframe(int id, int segment, const vpImage<unsigned char> &image, const std::vector<IdepthSample> &samples);
+  /*!
+    Hand-over of \e kf, leaving \e window now (it is still in it): its image, and as depth samples its own points
+    (final now) and the window's active points seen from it.
+  */
+  void addKeyframe(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window);
+  /*!
+    Keyframes connected to the present, never loop candidates: the window and the keyframes whose points the window
+    re-uses now.
+  */
+  static std::set<int> connectedTo(const std::vector<KeyframePtr> &window);
 
   /*!
     Query the keyframes handed over since the last call, oldest first, until one closes a loop. \e map gives poses
@@ -111,13 +126,26 @@ public:
   */
   bool correct(const DetectedLoop &loop, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
                std::vector<std::pair<int, Sim3d>> &solution);
+  /*!
+    The global bundle adjustment after a correction (loop.globalBundleAdjustment): the problem of \e segment's stored
+    keyframes and points (\e windowPoses held fixed), to run in order or in the background.
+  */
+  std::unique_ptr<GlobalBundleJob> makeGlobalBundleJob(const GlobalMap &map, int segment,
+                                                       const std::map<int, SE3d> &windowPoses);
+  //! Real time: run \e job on the component's own thread (a job still running is cancelled first).
+  void runInBackground(std::unique_ptr<GlobalBundleJob> job) { m_globalBa.start(std::move(job)); }
+  //! The background job if it has ended (or, with \e wait, once it ends); null when none.
+  std::unique_ptr<GlobalBundleJob> takeBackgroundJob(bool wait);
+  //! Stop the background job (a correction would make its result stale).
+  void cancelBackgroundJob() { m_globalBa.cancel(); }
   //! Keyframe \e id's map was divided by \e scale (a correction applied): its loop features follow.
   void rescale(int id, double scale);
   //! A culled keyframe leaves the database.
   void removeKeyframe(int id);
   //! A new map segment: queries start again (stored keyframes stay; candidates come from the same segment only).
   void newSegment();
-  //! Drop every keyframe and loop (a new segment's mapper, vpHSlam::reset()); the statistics stay.
+  //! Drop every keyframe and loop, and a background job (a new segment's mapper, vpHSlam::reset()); the statistics
+  //! stay.
   void clear();
 
   //! Bytes held: the loop features, the database and the loop edges.
@@ -150,6 +178,8 @@ private:
   //! Every corrected loop's edges (the measured one and its connections), kept for the next corrections.
   std::vector<PoseGraphEdge> m_loopConstraints;
   LoopStatistics m_stats;
+  //! Real time: the global bundle adjustment's thread.
+  BackgroundBundleAdjustment m_globalBa;
 };
 } // namespace hslam
 

@@ -111,6 +111,20 @@ struct PosePoseEdge {
   bool consecutive = false; //!< consecutive keyframes (else: shared residuals in the window)
 };
 
+/*!
+  Pose-pose link between two window keyframes from the photometric residuals they share (both directions), for the
+  hybrid connectivity graph: the relative pose and its information (6x6, left perturbation of otherMthis, twist
+  order translation, rotation) = the pose block of the residuals' J^T W J at the current state. Inverse depths are
+  held fixed in it (not Schur-complemented), so it is optimistic; the pose graph weighs edges relative to each
+  other, which this keeps.
+*/
+struct PairInformation {
+  int otherKeyframeId = -1;
+  SE3d otherMthis;                         //!< relative pose at marginalisation
+  Eigen::Matrix<double, 6, 6> information; //!< see above
+  int residuals = 0;                       //!< inlier residuals between the two (both directions)
+};
+
 //! Co-visibility edge (a < b).
 struct CovisibilityEdge {
   int a = -1, b = -1;

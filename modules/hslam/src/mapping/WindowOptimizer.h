@@ -44,6 +44,7 @@
 #define HSLAM_MAPPING_WINDOW_OPTIMIZER_H
 
 #include "common/WorkerPool.h"
+#include "map/GlobalMap.h"
 #include "map/Keyframe.h"
 #include "mapping/MarginalizationPrior.h"
 #include "mapping/WindowLinearization.h"
@@ -86,20 +87,6 @@ struct PointActivationResult {
   double idepthHessian = 0.; //!< sum over inlier residuals of J^T W J (1 / variance proxy)
   int inlierResiduals = 0;
   double energy = 0.; //!< clamped robust energy at the result
-};
-
-/*!
-  Pose-pose link between two window keyframes from the photometric residuals they share (both directions), for the
-  hybrid connectivity graph: the relative pose and its information (6x6, left perturbation of otherMthis, twist
-  order translation, rotation) = the pose block of the residuals' J^T W J at the current state. Inverse depths are
-  held fixed in it (not Schur-complemented), so it is optimistic; the pose graph weighs edges relative to each
-  other, which this keeps.
-*/
-struct PairInformation {
-  int otherKeyframeId = -1;
-  SE3d otherMthis;                         //!< relative pose at marginalisation
-  Eigen::Matrix<double, 6, 6> information; //!< see above
-  int residuals = 0;                       //!< inlier residuals between the two (both directions)
 };
 
 class VISP_EXPORT WindowOptimizer

@@ -3,22 +3,20 @@
  */
 /*!
   \file LocalMapper.h
-  \brief The mapping back end of the direct core: keyframe window, immature points, activation, window
-  optimisation, outlier removal, marginalisation (DSO FullSystem::makeKeyFrame / makeNonKeyFrame).
+  \brief The mapping back end: the conductor of the window (mapping/KeyframeWindow.h), the global map's upkeep
+  (map/GlobalMapKeeper.h), the relocalisation index (tracking/RelocalizationIndex.h), the tracking reference
+  (tracking/TrackingReference.h) and the loop closer (loop/LoopCloser.h).
 
-  makeKeyframe() follows DSO's order: trace the window's immature points in the new frame, flag keyframes for
-  marginalisation, insert the keyframe, activate points (distance map), optimise the window, remove outliers,
-  marginalise points that leave the window, select new immature points in the new keyframe, marginalise the
-  flagged keyframes. makeNonKeyframe() only traces.
-
-  Initialisation (instead of DSO's coarse initializer): the two-view result gives the first keyframe sparse
-  triangulated points; gradient pixels selected in it get an inverse depth interpolated from them
-  (SparseIdepthInterpolator) and become active points; the frame that initialised becomes the second keyframe
-  through makeKeyframe(), whose window optimisation refines everything photometrically.
+  makeKeyframe() calls them in DSO's order (FullSystem::makeKeyFrame), then H-SLAM's: trace the window's immature
+  points in the new frame, insert the keyframe (activation), optimise the window, build the tracking reference, drop
+  points out of view, select new immature points, re-use stored points, marginalise the flagged keyframes (each is
+  indexed for relocalisation, handed to the loop closer and stored in the global map), then look for a loop and
+  apply its correction. makeNonKeyframe() only traces.
 
   Threading: not thread-safe. Owned by SlamSystem and used by one thread at a time (the mapping thread, or the
-  caller in deterministic mode, under SlamSystem's mapper mutex). Frames given to it are then owned by it; their
-  poses (cMw) and brightness are written here.
+  caller in deterministic mode, under SlamSystem's mapper mutex); the loop closer's global bundle adjustment runs on
+  its own thread in real time. Frames given to it are then owned by it; their poses (cMw) and brightness are
+  written here.
 */
 #ifndef HSLAM_SYSTEM_LOCAL_MAPPER_H
 #define HSLAM_SYSTEM_LOCAL_MAPPER_H
@@ -27,32 +25,30 @@
 #include "loop/LoopCloser.h"
 #include "map/Frame.h"
 #include "map/GlobalMap.h"
+#include "map/GlobalMapKeeper.h"
 #include "map/Keyframe.h"
+#include "mapping/KeyframeWindow.h"
 #include "math/SE3.h"
 #include "math/Sim3.h"
+#include "tracking/TrackingReference.h"
 
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <atomic>
+#include <map>
 #include <memory>
-#include <set>
 #include <vector>
 
 namespace hslam
 {
-struct ActivationCandidate;
 class CoarseTracker;
-struct CoarseTrackerPoint;
-struct PointActivationResult;
-struct ReferenceFeature;
 class OrbVocabulary;
+class RelocalizationIndex;
 struct TwoViewInitialization;
 struct RelocalizationKeyframe;
 struct RelocalizationFrame;
 struct WindowView;
-struct PairInformation;
-struct GlobalBundleJob;
 
 class VISP_EXPORT LocalMapper
 {
@@ -112,7 +108,7 @@ public:
   //! Bytes held for keyframes that left the window: global map (points, graph) and relocalisation index.
   double marginalizedMemoryBytes() const;
   //! Keyframes whose data is held: the window's and those stored in the global map.
-  int keyframesHeld() const { return static_cast<int>(m_window.size() + m_globalMap.keyframes().size()); }
+  int keyframesHeld() const { return static_cast<int>(m_window->size() + m_keeper.globalMap().keyframes().size()); }
   //! Pose of the newest keyframe (world-to-camera); identity when none.
   SE3d newestKeyframe_cMw() const;
   int newestKeyframeId() const;
@@ -121,7 +117,7 @@ public:
     True when the last window optimisation of one of the first keyframes had an RMSE too high for a correct
     initialisation (DSO's check on keyframes 2 to 4): the caller should start again.
   */
-  bool initializationFailed() const { return m_initializationFailed; }
+  bool initializationFailed() const { return m_window->initializationFailed(); }
 
   /*!
     A lost camera was relocalised into this segment's map (the relocalisation confirmed by the map's points): the
@@ -137,22 +133,13 @@ public:
 
   // ---- global map (system.mode vo-reuse and slam)
   //! Counters of global-map re-use since the start.
-  struct ReuseStatistics {
-    int keyframes = 0;        //!< keyframes made while re-use was on
-    int reactivated = 0;      //!< global points re-activated by early adoption
-    int fused = 0;            //!< global points absorbed by late fusion
-    int windowActive = 0;     //!< active points in the window now
-    int windowFromGlobal = 0; //!< of which came from the global map
-    int storedKeyframes = 0;  //!< keyframes in the global map
-    int culledKeyframes = 0;  //!< of which culled (pose node only)
-    size_t storedPoints = 0;  //!< points held by the global map (any state)
-  };
+  using ReuseStatistics = GlobalMapKeeper::Statistics;
   ReuseStatistics reuseStatistics() const;
   //! True when marginalised keyframes are kept (system.mode is not vo-strict).
   bool keepsGlobalMap() const;
   //! The same rule for a mode, before any mapper exists (the system decides from it what to load).
   static bool keepsGlobalMap(vpHSlamParameters::Mode mode) { return mode != vpHSlamParameters::modeVoStrict; }
-  const GlobalMap &globalMap() const { return m_globalMap; }
+  const GlobalMap &globalMap() const { return m_keeper.globalMap(); }
   // ---- loops (system.mode slam; loop/LoopCloser.h does the work)
   using LoopRecord = hslam::LoopRecord;
   using LoopStatistics = hslam::LoopStatistics;
@@ -221,50 +208,11 @@ public:
   int closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const;
 
 private:
-  void traceAll(const Frame &frame);
-  void activatePoints(const Keyframe &newest);
-  //! Median inverse depth of the window's active points (each in its host), 0 when there is none.
-  double medianActiveIdepth() const;
-  /*!
-    Turning in place: candidate \e c of \e host, refused by the Hessian test, is kept on a weak prior at
-    \e medianIdepth (clamped into its interval) when the translation from \e host to \e newest moves that depth by
-    less than mapper.rotationFlowPx and its residuals agree. Then \e r, \e priorIdepth and \e priorWeight (1 /
-    variance) are set and true returned.
-  */
-  bool activateOnDepthPrior(const Keyframe &newest, const Keyframe &host, const ActivationCandidate &c,
-                            double medianIdepth, PointActivationResult &r, double &priorIdepth,
-                            double &priorWeight) const;
-  //! Optimise, check, build the tracking reference, drop points out of view, new immature points, marginalise.
+  //! Optimise, check, build the tracking reference, drop points out of view, new immature points, re-use,
+  //! marginalise.
   void finishKeyframe(const KeyframePtr &kf, int seedKeyframe = -1);
-  void buildReferencePoints();
-  void dropPointsOutOfView(const Keyframe &newest);
-  //! Select a keyframe's new immature points: corners and gradient pixels, or its corners only.
-  void makeNewImmaturePoints(Keyframe &kf, bool cornersOnly = false);
-  void marginalize(int keyframeId);
-  //! Turn \e kf's descriptor-only immature points whose depth converged into marginalised points (kf leaves now).
-  void keepConvergedDescriptorPoints(Keyframe &kf);
-  //! Copy a marginalised keyframe into the global map with its pose-pose links (before the optimiser drops it).
-  void storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs);
-  //! A window keyframe as the global map keeps it: marginalised points, and active ones too when asked (saveMap).
-  GlobalKeyframe leanKeyframe(const Keyframe &kf, bool withActivePoints) const;
-  //! Pose-pose edges of a keyframe from its pair information, plus temporal links to window neighbours it shared no
-  //! residual with.
-  std::vector<PosePoseEdge> posePoseEdges(const Keyframe &kf, const std::vector<PairInformation> &pairs) const;
-  //! Early adoption into the newest keyframe, then late fusion in the window; returns points re-activated.
-  //! \e seedKeyframe: see makeKeyframe().
-  int reuseGlobalPoints(Keyframe &newest, int seedKeyframe);
-  //! Re-read the stored poses the window's re-used points are anchored to (a loop correction moves them); an
-  //! anchor whose keyframe left the global map is dropped.
-  void refreshAnchors();
-  //! After an optimisation: anchors whose point lands more than globalMap.anchorMaxErrorPx from its stored pixel are
-  //! dropped (a wrong match, or a stored point the window disagrees with); returns how many.
-  int dropAnchorOutliers();
-  //! A stored keyframe, its co-visible keyframes and its neighbours in time that the global map holds (not culled).
-  std::vector<int> storedNeighbourhood(int id) const;
-  //! Hand a keyframe leaving the window to the loop closer: its image and the window's inverse depths in it.
-  void handOverToLoopCloser(const Keyframe &kf);
-  //! Keyframes connected to the present: the window and the keyframes of the points it re-uses.
-  std::set<int> connectedToWindow() const;
+  //! Keyframe \e id leaves the window: indexed for relocalisation, handed to the loop closer, stored.
+  void marginalize(int id);
   //! Loop detection for the keyframes handed over (slam mode), and the correction of an accepted loop.
   void closeLoops();
   /*!
@@ -279,20 +227,25 @@ private:
   //! else in the background (collected by collectGlobalBundleAdjustment() at a later keyframe).
   void startGlobalBundleAdjustment();
   void finishGlobalBundleAdjustment(const GlobalBundleJob &job);
-  //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates (relocalisation).
-  void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
+  //! The window's refinement of re-used points, as the global map's upkeep asks for it.
+  ReuseRefinement reuseRefinement() const;
+  std::map<int, SE3d> windowPoses() const;
+  //! The per-segment components, fresh (a new segment shares nothing with the old one).
+  void makeSegmentComponents();
 
-  struct Impl;
-  std::unique_ptr<Impl> m_impl;
-  std::vector<KeyframePtr> m_window; //!< oldest first
+  vpHSlamParameters m_params;
+  PinholeIntrinsics m_K0;
+  int m_width, m_height;
   bool m_photometricCalibration;
-  bool m_initializationFailed = false;
-  GlobalMap m_globalMap; //!< outlives segments (clear() keeps it)
-  int m_segment = 0;     //!< segment of the keyframes being made
-  ReuseStatistics m_reuse;
+  const OrbVocabulary *m_vocabulary; //!< null: no relocalisation index, no loop closer
+  std::unique_ptr<KeyframeWindow> m_window;
+  TrackingReference m_reference;
+  std::unique_ptr<RelocalizationIndex> m_relocalization; //!< null without a vocabulary
+  GlobalMapKeeper m_keeper;                              //!< outlives segments (clear() keeps it)
   //! Loop closure (slam mode with a vocabulary). clear() empties it (loops stay within a segment); its statistics
   //! count the whole run until reset().
   std::unique_ptr<LoopCloser> m_loop;
+  std::vector<KeyframeState> m_marginalizedStates; //!< keyframes that left since the last report
   std::atomic<bool> m_correctingLoop{false};
 };
 } // namespace hslam

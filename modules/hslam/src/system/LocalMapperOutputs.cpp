@@ -1,46 +1,28 @@
 /*
  * H-SLAM for ViSP.
  */
-// LocalMapper's outputs: the tracking reference, keyframe states, points and counts, memory (LocalMapper.h).
+// LocalMapper's outputs and queries: the tracking reference, keyframe states, points and counts, memory, map files,
+// relocalisation (LocalMapper.h). Each is answered by the component that owns the state.
 #include "system/LocalMapper.h"
 
-#include "system/LocalMapperImpl.h"
-
+#include "features/BinaryDescriptor.h"
 #include "tracking/CoarseTracker.h"
-
-#include <vector>
+#include "tracking/RelocalizationIndex.h"
+#include "tracking/WindowRelocalization.h"
 
 namespace hslam
 {
 bool LocalMapper::prepareTrackingReference(CoarseTracker &tracker, int &keyframeId, AffineBrightness &affine,
                                            double &exposure) const
 {
-  const Impl &m = *m_impl;
-  if (m_window.empty() || m.referenceKeyframe < 0) {
-    return false;
-  }
-  KeyframePtr ref;
-  for (const KeyframePtr &kf : m_window) {
-    if (kf->id() == m.referenceKeyframe) {
-      ref = kf;
-    }
-  }
-  if (!ref) {
-    return false;
-  }
-  tracker.setReference(*ref->frame, m.referencePoints);
-  tracker.setReferenceFeatures(m.referenceFeatures);
-  keyframeId = ref->id();
-  affine = ref->frame->affine;
-  exposure = ref->frame->exposure;
-  return true;
+  return m_reference.applyTo(m_window->keyframes(), tracker, keyframeId, affine, exposure);
 }
 
 void LocalMapper::takeKeyframeStates(std::vector<KeyframeState> &states)
 {
-  states = m_impl->marginalizedStates;
-  m_impl->marginalizedStates.clear();
-  for (const KeyframePtr &kf : m_window) {
+  states = m_marginalizedStates;
+  m_marginalizedStates.clear();
+  for (const KeyframePtr &kf : m_window->keyframes()) {
     KeyframeState s;
     s.id = kf->id();
     s.wMc = kf->frame->cMw.inverse();
@@ -55,72 +37,160 @@ void LocalMapper::takeKeyframeStates(std::vector<KeyframeState> &states)
 void LocalMapper::activePointsWorld(std::vector<Eigen::Vector3d> &points) const
 {
   points.clear();
-  const PinholeIntrinsics &K = m_impl->K0;
-  for (const KeyframePtr &kf : m_window) {
-    const SE3d wMc = kf->frame->cMw.inverse();
-    for (const MapPoint &p : kf->points) {
-      if (p.status != PointStatus::active || !(p.idepth > 0.)) {
-        continue;
-      }
-      const Eigen::Vector3d cX((p.u - K.cx) / K.fx / p.idepth, (p.v - K.cy) / K.fy / p.idepth, 1. / p.idepth);
-      points.push_back(wMc * cX);
-    }
-  }
+  m_window->pointsWorld(points, nullptr, true);
+}
+
+void LocalMapper::mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const
+{
+  points.clear();
+  status.clear();
+  m_window->pointsWorld(points, &status, false);
+  m_keeper.pointsWorld(points, status);
 }
 
 int LocalMapper::activePointCount() const
 {
-  int n = 0;
-  for (const KeyframePtr &kf : m_window) {
-    for (const MapPoint &p : kf->points) {
-      n += p.status == PointStatus::active ? 1 : 0;
-    }
-  }
-  return n;
+  return m_window->activePointCount();
 }
 
 int LocalMapper::immaturePointCount() const
 {
-  int n = 0;
-  for (const KeyframePtr &kf : m_window) {
-    n += static_cast<int>(kf->immature.size());
-  }
-  return n;
+  return m_window->immaturePointCount();
 }
 
 double LocalMapper::windowMemoryBytes() const
 {
-  double bytes = 0.;
-  for (const KeyframePtr &kf : m_window) {
-    const ImagePyramid &pyr = kf->frame->pyramid;
-    for (int l = 0; l < pyr.numLevels(); ++l) {
-      const PyramidLevel &level = pyr.level(l);
-      bytes += static_cast<double>(level.color.capacity() * sizeof(Eigen::Vector3f) +
-                                   level.gradSq.capacity() * sizeof(float));
-    }
-    bytes += static_cast<double>(kf->frame->raw.getSize());
-    bytes +=
-        static_cast<double>(kf->points.capacity() * sizeof(MapPoint) + kf->immature.capacity() * sizeof(ImmaturePoint));
-  }
-  return bytes;
+  return m_window->memoryBytes();
 }
 
 double LocalMapper::marginalizedMemoryBytes() const
 {
-  double bytes = m_globalMap.memoryBytes() + loopMemoryBytes();
-  if (m_impl->relocalization) {
-    bytes += m_impl->relocalization->memoryBytes();
+  double bytes = m_keeper.globalMap().memoryBytes() + loopMemoryBytes();
+  if (m_relocalization) {
+    bytes += m_relocalization->memoryBytes();
   }
   return bytes;
 }
 
 SE3d LocalMapper::newestKeyframe_cMw() const
 {
-  return m_window.empty() ? SE3d() : m_window.back()->frame->cMw;
+  return m_window->empty() ? SE3d() : m_window->keyframes().back()->frame->cMw;
 }
 
 int LocalMapper::newestKeyframeId() const
 {
-  return m_window.empty() ? -1 : m_window.back()->id();
+  return m_window->empty() ? -1 : m_window->keyframes().back()->id();
+}
+
+// ------------------------------------------------------------------------------------------------ global map
+
+LocalMapper::ReuseStatistics LocalMapper::reuseStatistics() const
+{
+  return m_keeper.statistics(m_window->keyframes());
+}
+
+bool LocalMapper::keepsGlobalMap() const
+{
+  return keepsGlobalMap(m_params.system.mode);
+}
+
+const LocalMapper::LoopStatistics &LocalMapper::loopStatistics() const
+{
+  static const LoopStatistics none;
+  return m_loop ? m_loop->statistics() : none;
+}
+
+double LocalMapper::loopMemoryBytes() const
+{
+  return m_loop ? m_loop->memoryBytes() : 0.;
+}
+
+void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges)
+{
+  KeyframeWindow &window = *m_window;
+  m_keeper.snapshot(
+      window.keyframes(), [&window](int id) { return window.pairInformation(id); }, keyframes, edges);
+}
+
+void LocalMapper::restoreMap(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
+{
+  m_keeper.restore(std::move(keyframes), std::move(edges));
+  if (m_relocalization) {
+    m_relocalization->clear(); // a second load replaces the first: nothing of it stays searchable
+  }
+}
+
+// ------------------------------------------------------------------------------------------------ relocalisation
+
+double LocalMapper::descriptorBytesPerKeyframe() const
+{
+  if (!m_window->withDescriptors() || m_window->empty()) {
+    return 0.;
+  }
+  // What a descriptor adds to a point: the descriptor, its angle and its flag (padding included by sizeof
+  // differences would overstate it; these are the members added for descriptor sharing).
+  constexpr double kPerPoint = sizeof(OrbDescriptor) + sizeof(float) + sizeof(bool);
+  double points = 0.;
+  for (const KeyframePtr &kf : m_window->keyframes()) {
+    points += static_cast<double>(kf->points.size() + kf->immature.size());
+  }
+  double bytes = kPerPoint * points / static_cast<double>(m_window->size());
+  if (m_relocalization && m_relocalization->size() > 0) {
+    bytes += m_relocalization->memoryBytes() / static_cast<double>(m_relocalization->size());
+  }
+  return bytes;
+}
+
+bool LocalMapper::indexesKeyframes() const
+{
+  return m_relocalization != nullptr;
+}
+
+bool LocalMapper::indexGlobalMap()
+{
+  if (!m_relocalization) {
+    return false;
+  }
+  m_relocalization->indexGlobalMap(m_keeper.globalMap());
+  return true;
+}
+
+std::vector<RelocalizationKeyframe> LocalMapper::relocalizationCandidates(RelocalizationFrame &frame, int maxCandidates,
+                                                                          int preferred) const
+{
+  if (!m_relocalization) {
+    return {};
+  }
+  return m_relocalization->candidatesFor(frame, maxCandidates, preferred, m_window->keyframes());
+}
+
+std::vector<WindowView> LocalMapper::windowViews() const
+{
+  std::vector<WindowView> views;
+  for (const KeyframePtr &kf : m_window->keyframes()) {
+    WindowView v;
+    v.id = kf->id();
+    v.cMw = kf->frame->cMw;
+    v.frame = kf->frame;
+    views.push_back(std::move(v));
+  }
+  return views;
+}
+
+void LocalMapper::localMapFeatures(int id, std::vector<ReferenceFeature> &features, std::vector<int> &keyframeIds) const
+{
+  keyframeIds = m_keeper.storedNeighbourhood(id);
+  TrackingReference::storedFeatures(m_keeper.globalMap(), keyframeIds, m_K0, features);
+}
+
+void LocalMapper::localMapReference(const std::vector<int> &keyframeIds, const SE3d &refMw,
+                                    std::vector<CoarseTrackerPoint> &points) const
+{
+  TrackingReference::fromStoredPoints(m_keeper.globalMap(), keyframeIds, refMw, m_K0, m_width, m_height, points);
+}
+
+int LocalMapper::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const
+{
+  return m_keeper.closestKeyframe(cMw, keyframeIds);
 }
 } // namespace hslam

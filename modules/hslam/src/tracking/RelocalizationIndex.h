@@ -17,8 +17,11 @@
 #ifndef HSLAM_TRACKING_RELOCALIZATION_INDEX_H
 #define HSLAM_TRACKING_RELOCALIZATION_INDEX_H
 
+#include "features/ImagePyramid.h"
 #include "features/OrbVocabulary.h"
 #include "loop/KeyframeDatabase.h"
+#include "map/GlobalMap.h"
+#include "map/Keyframe.h"
 #include "tracking/Relocalizer.h"
 
 #include <visp3/core/vpConfig.h>
@@ -35,8 +38,27 @@ public:
   //! Levels above the leaves at which the direct index groups features (ORB-SLAM2: 4 with L = 6).
   static constexpr int kDirectIndexLevelsUp = 4;
 
-  //! \e vocabulary must outlive the index (the system owns it).
-  explicit RelocalizationIndex(const OrbVocabulary &vocabulary);
+  //! \e vocabulary must outlive the index (the system owns it); \e K0: the keyframes' level-0 intrinsics.
+  RelocalizationIndex(const OrbVocabulary &vocabulary, const PinholeIntrinsics &K0);
+
+  // ---- keyframes as the mapper has them
+  //! A new window keyframe: its BoW vector from every selected point's descriptor.
+  void addKeyframe(const Keyframe &kf);
+  //! A keyframe leaving the window: its final described corners in world coordinates.
+  void storeKeyframe(const Keyframe &kf);
+  //! A stored keyframe moved (loop correction): its points again from \e g (kept only when it had points).
+  void refreshKeyframe(const GlobalKeyframe &g);
+  //! Every keyframe of \e map (localisation-only in a loaded map): BoW vector of its described points, corners.
+  void indexGlobalMap(const GlobalMap &map);
+  /*!
+    Keyframes most similar to a lost frame (BoW), best first (\e preferred first when given), each with its points
+    and those of its neighbours in time (from \e window while they are in it) in world coordinates and with their
+    direct index; the frame's direct index is filled on the way.
+  */
+  std::vector<RelocalizationKeyframe> candidatesFor(RelocalizationFrame &frame, int maxCandidates, int preferred,
+                                                    const std::vector<KeyframePtr> &window) const;
+
+  // ---- by id
 
   //! A new keyframe, with the descriptors of its selected points.
   void addKeyframe(int id, const std::vector<OrbDescriptor> &descriptors);
@@ -61,7 +83,11 @@ public:
   double memoryBytes() const;
 
 private:
+  //! Corners of \e kf with a descriptor and an inverse depth, in world coordinates.
+  void keyframePointsWorld(const Keyframe &kf, RelocalizationKeyframe &out) const;
+
   const OrbVocabulary &m_vocabulary;
+  PinholeIntrinsics m_K0;
   KeyframeDatabase m_database;
   std::map<int, RelocalizationKeyframe> m_points;
 };

@@ -1,17 +1,9 @@
 /*
  * H-SLAM for ViSP.
  */
-// LocalMapper, global map part: what leaves the window is kept (lean), and global points come back into the window
-// (early adoption, late fusion). H-SLAM paper sec. 3.3; the matching is map/GlobalPointReuse.h.
-#include "system/LocalMapper.h"
-
-#include "system/LocalMapperImpl.h"
+#include "map/GlobalMapKeeper.h"
 
 #include "map/GlobalPointReuse.h"
-#include "mapping/AnchorResidual.h"
-#include "mapping/PointActivation.h"
-#include "tracking/RelocalizationIndex.h"
-#include "tracking/Relocalizer.h"
 
 #include <visp3/hslam/vpHSlamLog.h>
 
@@ -20,13 +12,14 @@
 #include <cstdlib>
 #include <limits>
 #include <map>
+#include <set>
 
 namespace hslam
 {
 namespace
 {
-//! Gauss-Newton iterations on a re-activated point's inverse depth (as for any activation).
-constexpr int kReactivationIterations = 3;
+//! Relocalisation and re-use search a stored keyframe together with the keyframes this many ids before and after it.
+constexpr int kNeighboursInTime = 2;
 
 OrbMatcherOptions reuseMatcherOptions(const vpHSlamParameters::GlobalMap &g, int width)
 {
@@ -112,56 +105,28 @@ void anchorToStoredPoint(MapPoint &mp, const GlobalKeyframe &oldHost, const Glob
   mp.idepthPrior = 0.;
   mp.idepthPriorWeight = 0.;
 }
+
+GlobalMap::Options mapOptions(const vpHSlamParameters &params)
+{
+  const vpHSlamParameters::GlobalMap &g = params.globalMap;
+  GlobalMap::Options o;
+  o.covisibilityMinShared = g.covisibilityMinShared;
+  o.cullObservedShare = g.cullObservedShare;
+  o.cullMinObservers = g.cullMinObservers;
+  o.windowSize = params.mapper.windowSize;
+  return o;
+}
 } // namespace
 
-int LocalMapper::dropAnchorOutliers()
+GlobalMapKeeper::GlobalMapKeeper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height)
+    : m_params(params), m_K0(K0), m_width(width), m_height(height), m_map(mapOptions(params))
 {
-  if (!m_impl->params.globalMap.anchors) {
-    return 0; // no point carries an anchor
-  }
-  const double maxError = m_impl->params.globalMap.anchorMaxErrorPx;
-  int dropped = 0;
-  for (const KeyframePtr &kf : m_window) {
-    for (MapPoint &p : kf->points) {
-      if (p.anchorKeyframeId < 0 || p.status != PointStatus::active) {
-        continue;
-      }
-      if (!(anchorPixelError(m_impl->K0, kf->frame->cMw, p.u, p.v, p.idepth, p.anchorCMw, p.anchorU, p.anchorV) <=
-            maxError)) {
-        p.anchorKeyframeId = -1;
-        ++dropped;
-      }
-    }
-  }
-  return dropped;
 }
 
-void LocalMapper::refreshAnchors()
-{
-  if (!m_impl->params.globalMap.anchors) {
-    return;
-  }
-  for (const KeyframePtr &kf : m_window) {
-    for (MapPoint &p : kf->points) {
-      if (p.anchorKeyframeId < 0 || p.status != PointStatus::active) {
-        continue;
-      }
-      const GlobalKeyframe *stored = m_globalMap.find(p.anchorKeyframeId);
-      if (stored) {
-        p.anchorCMw = stored->cMw;
-      } else {
-        p.anchorKeyframeId = -1;
-      }
-    }
-  }
-}
+// ------------------------------------------------------------------------------------------------ storing
 
-bool LocalMapper::keepsGlobalMap() const
-{
-  return keepsGlobalMap(m_impl->params.system.mode);
-}
-
-GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoints) const
+GlobalKeyframe GlobalMapKeeper::leanKeyframe(const Keyframe &kf, const std::vector<KeyframePtr> &window,
+                                             bool withActivePoints) const
 {
   GlobalKeyframe g;
   g.id = kf.id();
@@ -174,10 +139,10 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
   g.points.reserve(kf.points.size());
   // Observers' poses, for the pixels where they saw each point (window keyframes, else stored ones).
   std::map<int, SE3d> observerPoses;
-  for (const KeyframePtr &w : m_window) {
+  for (const KeyframePtr &w : window) {
     observerPoses[w->id()] = w->frame->cMw;
   }
-  const PinholeIntrinsics &K = m_impl->K0;
+  const PinholeIntrinsics &K = m_K0;
   const SE3d wMh = kf.frame->cMw.inverse();
   constexpr float kUnknown = std::numeric_limits<float>::quiet_NaN();
   for (const MapPoint &p : kf.points) {
@@ -209,7 +174,7 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
       }
       auto pose = observerPoses.find(o);
       if (pose == observerPoses.end()) {
-        const GlobalKeyframe *stored = m_globalMap.find(o);
+        const GlobalKeyframe *stored = m_map.find(o);
         if (!stored) {
           continue;
         }
@@ -227,8 +192,8 @@ GlobalKeyframe LocalMapper::leanKeyframe(const Keyframe &kf, bool withActivePoin
   return g;
 }
 
-std::vector<PosePoseEdge> LocalMapper::posePoseEdges(const Keyframe &kf,
-                                                     const std::vector<PairInformation> &pairs) const
+std::vector<PosePoseEdge> GlobalMapKeeper::posePoseEdges(const Keyframe &kf, const std::vector<KeyframePtr> &window,
+                                                         const std::vector<PairInformation> &pairs) const
 {
   std::vector<PosePoseEdge> edges;
   const int id = kf.id();
@@ -247,7 +212,7 @@ std::vector<PosePoseEdge> LocalMapper::posePoseEdges(const Keyframe &kf,
   // The temporal chain stays whole: a neighbour in time still in the window that shared no residual with this
   // keyframe (a jump) is linked anyway, with no information. Whichever of two consecutive keyframes leaves the
   // window first makes the link, so every consecutive pair is linked once.
-  for (const KeyframePtr &other : m_window) {
+  for (const KeyframePtr &other : window) {
     const int o = other->id();
     if ((o == id + 1 && !linkedAfter) || (o == id - 1 && !linkedBefore)) {
       PosePoseEdge e;
@@ -261,42 +226,71 @@ std::vector<PosePoseEdge> LocalMapper::posePoseEdges(const Keyframe &kf,
   return edges;
 }
 
-void LocalMapper::storeInGlobalMap(const Keyframe &kf, const std::vector<PairInformation> &pairs)
+bool GlobalMapKeeper::store(const Keyframe &kf, const std::vector<KeyframePtr> &window,
+                            const std::vector<PairInformation> &pairs)
 {
-  for (const PosePoseEdge &e : posePoseEdges(kf, pairs)) {
-    m_globalMap.addPosePoseEdge(e);
+  for (const PosePoseEdge &e : posePoseEdges(kf, window, pairs)) {
+    m_map.addPosePoseEdge(e);
   }
-  const int id = kf.id();
-  if (m_globalMap.add(leanKeyframe(kf, false))) { // culled at once
-    if (m_impl->relocalization) {
-      m_impl->relocalization->removeKeyframe(id);
-    }
-    if (m_loop) {
-      m_loop->removeKeyframe(id);
-    }
-  }
+  return m_map.add(leanKeyframe(kf, window, false));
 }
 
-int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
+std::vector<int> GlobalMapKeeper::storedNeighbourhood(int id) const
 {
-  Impl &m = *m_impl;
-  ++m_reuse.keyframes;
-  if (m_globalMap.keyframes().empty()) {
+  std::vector<int> ids = m_map.covisibleWith(id);
+  for (int n = id - kNeighboursInTime; n <= id + kNeighboursInTime; ++n) {
+    ids.push_back(n);
+  }
+  std::sort(ids.begin(), ids.end());
+  ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  std::vector<int> out;
+  for (int n : ids) {
+    const GlobalKeyframe *kf = m_map.find(n);
+    if (kf && !kf->culled) {
+      out.push_back(n);
+    }
+  }
+  return out;
+}
+
+int GlobalMapKeeper::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyframeIds) const
+{
+  const Eigen::Vector3d centre = cMw.inverse().translation();
+  int best = -1;
+  double bestDistance = 0.;
+  for (int id : keyframeIds) {
+    const GlobalKeyframe *kf = m_map.find(id);
+    if (!kf) {
+      continue;
+    }
+    const double d = (kf->cMw.inverse().translation() - centre).norm();
+    if (best < 0 || d < bestDistance) {
+      best = id;
+      bestDistance = d;
+    }
+  }
+  return best;
+}
+
+// ------------------------------------------------------------------------------------------------ re-use
+
+int GlobalMapKeeper::reuse(Keyframe &newest, const std::vector<KeyframePtr> &window, int seedKeyframe,
+                           const ReuseRefinement &refinement)
+{
+  ++m_stats.keyframes;
+  if (m_map.keyframes().empty()) {
     return 0;
   }
-  const vpHSlamParameters::GlobalMap &g = m.params.globalMap;
-  const OrbMatcherOptions options = reuseMatcherOptions(g, m.width);
   std::vector<int> windowIds;
-  for (const KeyframePtr &kf : m_window) {
+  for (const KeyframePtr &kf : window) {
     windowIds.push_back(kf->id());
   }
-
-  // Early adoption: the newest keyframe's corner candidates matched to global points.
+  // The stored keyframes searched: those whose points project into the newest keyframe (overlap test).
   std::vector<size_t> keypointToImmature;
   const ReuseTarget target = makeReuseTarget(
-      newest.frame->cMw, m.K0, m.width, m.height, m_segment, newest.immature,
+      newest.frame->cMw, m_K0, m_width, m_height, m_segment, newest.immature,
       [](const ImmaturePoint &) { return true; }, keypointToImmature);
-  std::vector<int> searched = selectReuseKeyframes(m_globalMap, windowIds, target, g.reuseMaxKeyframes);
+  std::vector<int> searched = selectReuseKeyframes(m_map, windowIds, target, m_params.globalMap.reuseMaxKeyframes);
   if (seedKeyframe >= 0) {
     // The place a relocalisation found: its stored corners project into the keyframe, but spread over several
     // keyframes, each with too few to pass the overlap test alone (3-lap synthetic loop: 7 samples, 10 needed).
@@ -309,38 +303,50 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
   if (searched.empty()) {
     return 0;
   }
+  const int adopted = adopt(newest, window.size() == 1, searched, target, keypointToImmature, refinement);
+  m_stats.reactivated += adopted;
+  const int fused = fuse(window, searched);
+  m_stats.fused += fused;
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << newest.id() << ": " << searched.size()
+                                              << " stored keyframes searched, " << adopted << " points re-activated, "
+                                              << fused << " fused");
+  return adopted;
+}
+
+int GlobalMapKeeper::adopt(Keyframe &newest, bool alone, const std::vector<int> &searched, const ReuseTarget &target,
+                           const std::vector<size_t> &keypointToImmature, const ReuseRefinement &refinement)
+{
+  const vpHSlamParameters::GlobalMap &g = m_params.globalMap;
   std::vector<bool> eraseImmature(newest.immature.size(), false);
   int adopted = 0;
   // The stored variance is the window's photometric one (grey-level noise 1, poses held): priorVarianceScale
   // makes the re-used estimate count for less against the new observations.
-  std::vector<ReuseMatch> matches = matchGlobalPoints(m_globalMap, searched, target, options);
+  std::vector<ReuseMatch> matches = matchGlobalPoints(m_map, searched, target, reuseMatcherOptions(g, m_width));
   for (ReuseMatch &match : matches) {
     match.idepthVar *= g.priorVarianceScale;
   }
   int refused = 0;
   // A keyframe alone in the window (seeded from the stored map) has no other image to refine a point against: the
   // stored estimate is taken as it is, and the next keyframes refine it under its prior.
-  const bool alone = m_window.size() == 1;
   for (const ReuseMatch &match : matches) {
     const size_t ii = keypointToImmature[static_cast<size_t>(match.keypoint)];
     const ImmaturePoint &pt = newest.immature[ii];
     const double priorWeight = 1. / std::max(match.idepthVar, 1e-12);
-    PointActivationResult r;
+    ReuseRefinement::Result r;
     if (alone) {
       r.accepted = true;
       r.idepth = match.idepth;
       r.idepthHessian = priorWeight;
     } else {
-      r = m.optimizer.optimizeNewPoint(newest.id(), pt.u, pt.v, match.idepth, pt.patch, pt.patchWeight,
-                                       kReactivationIterations, match.idepth, priorWeight);
+      r = refinement.refine(newest.id(), pt, match.idepth, priorWeight);
     }
     // Re-activation keeps the old estimate: the photometric refinement must stay within its prior.
     if (!r.accepted || std::fabs(r.idepth - match.idepth) > g.fusionSigmas * std::sqrt(match.idepthVar)) {
       ++refused;
       continue;
     }
-    const GlobalKeyframe *oldHost = m_globalMap.find(match.keyframeId);
-    MapPoint mp = PointActivation::makeMapPoint(pt);
+    const GlobalKeyframe *oldHost = m_map.find(match.keyframeId);
+    MapPoint mp = refinement.activate(pt);
     mp.idepth = r.idepth;
     mp.idepthVar = 1. / r.idepthHessian;
     mp.idepthPrior = match.idepth;
@@ -351,7 +357,7 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
       anchorToStoredPoint(mp, *oldHost, oldHost->points[match.pointIndex], g.priorVarianceScale);
     }
     newest.points.push_back(std::move(mp));
-    m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::reactivated);
+    m_map.absorb(match.keyframeId, match.pointIndex, GlobalPointState::reactivated);
     eraseImmature[ii] = true;
     ++adopted;
   }
@@ -364,17 +370,25 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
     }
     newest.immature.resize(out);
   }
-  m_reuse.reactivated += adopted;
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << newest.id() << ": " << matches.size() << " of "
+                                              << target.keypoints.size() << " corners matched, " << refused
+                                              << " refused");
+  return adopted;
+}
 
+int GlobalMapKeeper::fuse(const std::vector<KeyframePtr> &window, const std::vector<int> &searched)
+{
   // Late fusion: active corners of the window that match a global point whose depth agrees within
   // fusionSigmas standard deviations absorb it (inverse-variance fusion, kept as the point's prior).
+  const vpHSlamParameters::GlobalMap &g = m_params.globalMap;
+  const OrbMatcherOptions options = reuseMatcherOptions(g, m_width);
   int fused = 0;
-  for (const KeyframePtr &host : m_window) {
+  for (const KeyframePtr &host : window) {
     std::vector<size_t> keypointToPoint;
     const ReuseTarget t = makeReuseTarget(
-        host->frame->cMw, m.K0, m.width, m.height, m_segment, host->points,
+        host->frame->cMw, m_K0, m_width, m_height, m_segment, host->points,
         [](const MapPoint &p) { return p.status == PointStatus::active && !p.fromGlobalMap; }, keypointToPoint);
-    for (ReuseMatch match : matchGlobalPoints(m_globalMap, searched, t, options)) {
+    for (ReuseMatch match : matchGlobalPoints(m_map, searched, t, options)) {
       match.idepthVar *= g.priorVarianceScale;
       MapPoint &p = host->points[keypointToPoint[static_cast<size_t>(match.keypoint)]];
       if (p.fromGlobalMap || std::fabs(match.idepth - p.idepth) > g.fusionSigmas * std::sqrt(p.idepthVar)) {
@@ -398,27 +412,22 @@ int LocalMapper::reuseGlobalPoints(Keyframe &newest, int seedKeyframe)
         p.idepthPriorWeight = 1. / std::max(match.idepthVar, 1e-12);
       }
       p.fromGlobalMap = true;
-      const GlobalKeyframe *oldHost = m_globalMap.find(match.keyframeId);
+      const GlobalKeyframe *oldHost = m_map.find(match.keyframeId);
       carryObservations(p, oldHost->points[match.pointIndex], match.keyframeId);
       if (g.anchors) {
         anchorToStoredPoint(p, *oldHost, oldHost->points[match.pointIndex], g.priorVarianceScale);
       }
-      m_globalMap.absorb(match.keyframeId, match.pointIndex, GlobalPointState::fused);
+      m_map.absorb(match.keyframeId, match.pointIndex, GlobalPointState::fused);
       ++fused;
     }
   }
-  m_reuse.fused += fused;
-  VP_HSLAM_LOG(vpHSlamLog::debug,
-               "keyframe " << newest.id() << ": " << searched.size() << " stored keyframes searched, " << matches.size()
-                           << " of " << target.keypoints.size() << " corners matched, " << refused << " refused, "
-                           << adopted << " points re-activated, " << fused << " fused");
-  return adopted;
+  return fused;
 }
 
-LocalMapper::ReuseStatistics LocalMapper::reuseStatistics() const
+GlobalMapKeeper::Statistics GlobalMapKeeper::statistics(const std::vector<KeyframePtr> &window) const
 {
-  ReuseStatistics s = m_reuse;
-  for (const KeyframePtr &kf : m_window) {
+  Statistics s = m_stats;
+  for (const KeyframePtr &kf : window) {
     for (const MapPoint &p : kf->points) {
       if (p.status == PointStatus::active) {
         ++s.windowActive;
@@ -426,120 +435,101 @@ LocalMapper::ReuseStatistics LocalMapper::reuseStatistics() const
       }
     }
   }
-  s.storedKeyframes = static_cast<int>(m_globalMap.keyframes().size());
-  s.culledKeyframes = m_globalMap.culledCount();
-  s.storedPoints = m_globalMap.pointCount();
+  s.storedKeyframes = static_cast<int>(m_map.keyframes().size());
+  s.culledKeyframes = m_map.culledCount();
+  s.storedPoints = m_map.pointCount();
   return s;
 }
 
-void LocalMapper::mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const
+void GlobalMapKeeper::pointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const
 {
-  points.clear();
-  status.clear();
-  const PinholeIntrinsics &K = m_impl->K0;
-  auto push = [&](const SE3d &wMc, double u, double v, double idepth, int s) {
-    const Eigen::Vector3d cX((u - K.cx) / K.fx / idepth, (v - K.cy) / K.fy / idepth, 1. / idepth);
-    points.push_back(wMc * cX);
-    status.push_back(s);
-  };
-  for (const KeyframePtr &kf : m_window) {
-    const SE3d wMc = kf->frame->cMw.inverse();
-    for (const MapPoint &p : kf->points) {
-      if (p.idepth > 0. && p.status != PointStatus::outlier) {
-        push(wMc, p.u, p.v, p.idepth, p.status == PointStatus::active ? 0 : 1);
-      }
-    }
-  }
-  for (const auto &entry : m_globalMap.keyframes()) {
+  for (const auto &entry : m_map.keyframes()) {
     const SE3d wMc = entry.second.cMw.inverse();
     for (const GlobalPoint &p : entry.second.points) {
       if (p.state == GlobalPointState::stored && p.idepth > 0.f) {
-        push(wMc, p.u, p.v, p.idepth, 1);
+        const Eigen::Vector3d cX((p.u - m_K0.cx) / m_K0.fx / p.idepth, (p.v - m_K0.cy) / m_K0.fy / p.idepth,
+                                 1. / p.idepth);
+        points.push_back(wMc * cX);
+        status.push_back(1);
       }
     }
   }
 }
-// ------------------------------------------------------------------------------ after a loop correction
 
-void LocalMapper::publishStoredKeyframe(int id, double scale)
+// ------------------------------------------------------------------------------------------------ map files
+
+void GlobalMapKeeper::snapshot(const std::vector<KeyframePtr> &window,
+                               const std::function<std::vector<PairInformation>(int)> &pairsOf,
+                               std::vector<GlobalKeyframe> &keyframes, std::vector<PosePoseEdge> &edges) const
 {
-  Impl &m = *m_impl;
-  const GlobalKeyframe *g = m_globalMap.find(id);
-  KeyframeState state;
-  state.id = id;
-  state.wMc = g->cMw.inverse();
-  state.inWindow = false;
-  state.scale = scale;
-  m.marginalizedStates.push_back(state);
-  RelocalizationKeyframe points;
-  if (!m.relocalization || !m.relocalization->keyframePoints(id, points)) {
-    return;
+  keyframes.clear();
+  edges = m_map.posePoseEdges();
+  for (const auto &entry : m_map.keyframes()) {
+    keyframes.push_back(entry.second);
   }
-  points.wX.clear();
-  points.descriptors.clear();
-  for (const GlobalPoint &p : g->points) {
-    if (p.hasOrb && p.isCorner && p.idepth > 0.f) {
-      points.wX.push_back(state.wMc * m.K0.unproject(p.u, p.v, p.idepth));
-      points.descriptors.push_back(p.orb);
+  const float minQuality = static_cast<float>(m_params.mapper.minTraceQuality);
+  for (const KeyframePtr &kf : window) {
+    keyframes.push_back(leanKeyframe(*kf, window, true));
+    // The newest keyframes' points are mostly still immature: those whose depth interval has converged are kept too
+    // (variance: the half interval squared), or the end of the run has no map to locate a camera in.
+    for (const ImmaturePoint &pt : kf->immature) {
+      if (!pt.hasOrb || !hasConvergedDepth(pt, minQuality)) {
+        continue;
+      }
+      GlobalPoint q;
+      q.u = pt.u;
+      q.v = pt.v;
+      q.idepth = 0.5f * (pt.idepthMin + pt.idepthMax);
+      q.idepthVar = 0.25f * (pt.idepthMax - pt.idepthMin) * (pt.idepthMax - pt.idepthMin);
+      q.orb = pt.orb;
+      q.orbAngleDeg = pt.orbAngleDeg;
+      q.isCorner = pt.isCorner;
+      q.hasOrb = true;
+      keyframes.back().points.push_back(std::move(q));
+    }
+    // Each window pair once: from the older keyframe to the newer one.
+    std::vector<PairInformation> pairs = pairsOf(kf->id());
+    pairs.erase(std::remove_if(pairs.begin(), pairs.end(),
+                               [&kf](const PairInformation &p) { return p.otherKeyframeId < kf->id(); }),
+                pairs.end());
+    for (const PosePoseEdge &e : posePoseEdges(*kf, window, pairs)) {
+      if (e.to > e.from) { // a link back in time is the older window keyframe's link forward
+        edges.push_back(e);
+      }
     }
   }
-  m.relocalization->setKeyframePoints(id, std::move(points.wX), std::move(points.descriptors));
+  // In id order whatever left the window first: the same map always gives the same file.
+  std::sort(keyframes.begin(), keyframes.end(),
+            [](const GlobalKeyframe &a, const GlobalKeyframe &b) { return a.id < b.id; });
+  // A segment whose window was dropped (tracking lost) leaves observers and edges naming keyframes nobody holds.
+  std::set<int> held;
+  for (const GlobalKeyframe &kf : keyframes) {
+    held.insert(kf.id);
+  }
+  for (GlobalKeyframe &kf : keyframes) {
+    for (GlobalPoint &p : kf.points) {
+      dropObservers(p, [&held](int id) { return held.count(id) == 0; });
+    }
+  }
+  edges.erase(std::remove_if(edges.begin(), edges.end(),
+                             [&held](const PosePoseEdge &e) { return !held.count(e.from) || !held.count(e.to); }),
+              edges.end());
 }
 
-void LocalMapper::startGlobalBundleAdjustment()
+void GlobalMapKeeper::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
 {
-  Impl &m = *m_impl;
-  const vpHSlamParameters::Loop &p = m.params.loop;
-  if (!p.globalBundleAdjustment || !m_loop) {
-    return;
+  int lastSegment = -1;
+  for (const GlobalKeyframe &kf : keyframes) {
+    lastSegment = std::max(lastSegment, kf.segment);
   }
-  std::map<int, SE3d> windowPoses;
-  for (const KeyframePtr &kf : m_window) {
-    windowPoses[kf->id()] = kf->frame->cMw;
-  }
-  GlobalBundleOptions options;
-  options.maxIterations = p.globalBaIterations;
-  options.huberPx = p.globalBaHuberPx;
-  std::unique_ptr<GlobalBundleJob> job =
-      makeGlobalBundleJob(m_globalMap, m_segment, windowPoses, m.K0, options, p.globalBaPointsPerKeyframe);
-  ++m_loop->statistics().globalBaStarted;
-  if (m.params.system.deterministic) {
-    job->run(); // in order, inside track(): the same output run to run
-    finishGlobalBundleAdjustment(*job);
-  } else {
-    m.globalBa.start(std::move(job)); // a job of an earlier loop still running is cancelled
-  }
+  m_map.restore(std::move(keyframes), std::move(edges));
+  m_segment = std::max(m_segment, lastSegment + 1);
 }
 
-bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
+void GlobalMapKeeper::reset()
 {
-  Impl &m = *m_impl;
-  if (!m.globalBa.running() || (!wait && !m.globalBa.finished())) {
-    return false;
-  }
-  std::unique_ptr<GlobalBundleJob> job = m.globalBa.take();
-  finishGlobalBundleAdjustment(*job);
-  return true;
-}
-
-void LocalMapper::finishGlobalBundleAdjustment(const GlobalBundleJob &job)
-{
-  const GlobalBundleSummary &s = job.summary;
-  LoopStatistics &stats = m_loop->statistics();
-  stats.globalBaSecondsMax = std::max(stats.globalBaSecondsMax, s.seconds);
-  const std::vector<int> moved = applyGlobalBundleJob(job, m_globalMap);
-  for (int id : moved) {
-    publishStoredKeyframe(id, 1.);
-  }
-  if (!moved.empty()) {
-    ++stats.globalBaApplied;
-    stats.globalBaRmsBeforePx = s.rmsBeforePx;
-    stats.globalBaRmsAfterPx = s.rmsAfterPx;
-  }
-  VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment "
-                                     << (moved.empty() ? "failed" : "applied") << ": " << s.keyframes << " keyframes ("
-                                     << moved.size() << " moved), " << s.points << " points, " << s.observations
-                                     << " observations, " << s.iterations << " iterations, reprojection RMS "
-                                     << s.rmsBeforePx << " -> " << s.rmsAfterPx << " px, " << s.seconds << " s");
+  m_map.clear();
+  m_stats = Statistics();
+  m_segment = 0;
 }
 } // namespace hslam
