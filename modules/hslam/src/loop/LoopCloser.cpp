@@ -43,6 +43,133 @@ LoopCloser::LoopCloser(const vpHSlamParameters::Loop &params, const PinholeIntri
 {
 }
 
+LoopCloser::~LoopCloser()
+{
+  if (m_thread.joinable()) {
+    {
+      std::lock_guard<std::mutex> lock(m_queueMutex);
+      m_stop = true;
+    }
+    m_wake.notify_all();
+    m_thread.join();
+  }
+}
+
+// ------------------------------------------------------------------------------------------------ the thread
+
+void LoopCloser::startThread()
+{
+  if (!m_thread.joinable()) {
+    m_thread = std::thread(&LoopCloser::run, this);
+  }
+}
+
+void LoopCloser::run()
+{
+  for (;;) {
+    Work work;
+    {
+      std::unique_lock<std::mutex> lock(m_queueMutex);
+      m_wake.wait(lock, [this]() { return m_stop || !m_queue.empty(); });
+      if (m_stop) {
+        return;
+      }
+      work = std::move(m_queue.front());
+      m_queue.pop_front();
+      m_busy = true;
+    }
+    Correction correction;
+    const bool solved = process(work, correction);
+    {
+      std::lock_guard<std::mutex> lock(m_queueMutex);
+      if (solved) {
+        m_corrections.push_back(std::move(correction));
+        ++m_correctionsSolved;
+      }
+      m_published = m_stats;
+      m_publishedBytes = heldBytes();
+      m_busy = false;
+    }
+    m_idle.notify_all();
+  }
+}
+
+bool LoopCloser::process(Work &work, Correction &correction)
+{
+  switch (work.kind) {
+  case Work::handOver:
+    addKeyframe(work.id, work.segment, work.image, work.samples);
+    return false;
+  case Work::remove:
+    dropKeyframe(work.id);
+    return false;
+  case Work::query:
+    break;
+  }
+  int solved = 0;
+  {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    solved = m_correctionsSolved;
+  }
+  // A copy made before the mapper applied every correction solved so far: its poses would undo them. Its keyframes
+  // stay pending for the next query.
+  if (work.correctionsApplied != solved) {
+    return false;
+  }
+  if (!detect(work.graph, work.connected, correction.loop)) {
+    return false;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool ok = correct(correction.loop, work.graph, work.windowPoses, correction.solution);
+  correction.solveMs = msSince(t0);
+  return ok;
+}
+
+void LoopCloser::enqueue(Work work)
+{
+  {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    m_queue.push_back(std::move(work));
+  }
+  m_wake.notify_one();
+}
+
+void LoopCloser::waitIdle(std::unique_lock<std::mutex> &lock)
+{
+  m_idle.wait(lock, [this]() { return m_queue.empty() && !m_busy; });
+}
+
+void LoopCloser::queueQuery(GlobalMap graph, std::set<int> connected, std::map<int, SE3d> windowPoses)
+{
+  Work work;
+  work.kind = Work::query;
+  work.graph = std::move(graph);
+  work.connected = std::move(connected);
+  work.windowPoses = std::move(windowPoses);
+  {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    work.correctionsApplied = m_correctionsTaken;
+  }
+  enqueue(std::move(work));
+}
+
+bool LoopCloser::takeCorrection(Correction &correction, bool wait)
+{
+  std::unique_lock<std::mutex> lock(m_queueMutex);
+  if (wait && m_thread.joinable()) {
+    waitIdle(lock);
+  }
+  if (m_corrections.empty()) {
+    return false;
+  }
+  correction = std::move(m_corrections.front());
+  m_corrections.pop_front();
+  ++m_correctionsTaken; // applied by the caller before it copies the map again
+  return true;
+}
+
+// ------------------------------------------------------------------------------------------------ hand-over
+
 void LoopCloser::addKeyframe(int id, int segment, const vpImage<unsigned char> &image,
                              const std::vector<IdepthSample> &samples)
 {
@@ -219,6 +346,9 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
   bool ok = false;
   try {
     ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution);
+    for (size_t i = 0; ok && i < solution.size(); ++i) {
+      rescale(solution[i].first, solution[i].second.scale()); // the loop features follow their keyframe's map
+    }
   } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
     VP_HSLAM_LOG(vpHSlamLog::warning,
                  "loop " << loop.keyframe << "-" << loop.candidate << ": " << e.getStringMessage());
@@ -230,7 +360,7 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
   return ok;
 }
 
-void LoopCloser::addKeyframe(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window)
+void LoopCloser::handOver(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window)
 {
   // Depth samples: the keyframe's own points (final now) and the window's active points seen from it.
   std::vector<IdepthSample> samples;
@@ -249,7 +379,17 @@ void LoopCloser::addKeyframe(const Keyframe &kf, int segment, const std::vector<
       }
     }
   }
-  addKeyframe(kf.id(), segment, kf.frame->raw, samples);
+  if (!m_thread.joinable()) {
+    addKeyframe(kf.id(), segment, kf.frame->raw, samples);
+    return;
+  }
+  Work work;
+  work.kind = Work::handOver;
+  work.id = kf.id();
+  work.segment = segment;
+  work.image = kf.frame->raw; // a copy: the keyframe's image is released once it is stored
+  work.samples = std::move(samples);
+  enqueue(std::move(work));
 }
 
 std::set<int> LoopCloser::connectedTo(const std::vector<KeyframePtr> &window)
@@ -278,7 +418,7 @@ std::unique_ptr<GlobalBundleJob> LoopCloser::makeGlobalBundleJob(const GlobalMap
   GlobalBundleOptions options;
   options.maxIterations = m_params.globalBaIterations;
   options.huberPx = m_params.globalBaHuberPx;
-  ++m_stats.globalBaStarted;
+  ++m_applied.globalBaStarted;
   return hslam::makeGlobalBundleJob(map, segment, windowPoses, m_K, options, m_params.globalBaPointsPerKeyframe);
 }
 
@@ -300,6 +440,18 @@ void LoopCloser::rescale(int id, double scale)
 
 void LoopCloser::removeKeyframe(int id)
 {
+  if (!m_thread.joinable()) {
+    dropKeyframe(id);
+    return;
+  }
+  Work work;
+  work.kind = Work::remove;
+  work.id = id;
+  enqueue(std::move(work));
+}
+
+void LoopCloser::dropKeyframe(int id)
+{
   m_database.remove(id);
   m_keyframes.erase(id);
   m_pending.erase(std::remove(m_pending.begin(), m_pending.end(), id), m_pending.end());
@@ -315,6 +467,13 @@ void LoopCloser::newSegment()
 void LoopCloser::clear()
 {
   m_globalBa.cancel();
+  if (m_thread.joinable()) {
+    std::unique_lock<std::mutex> lock(m_queueMutex);
+    waitIdle(lock); // the thread holds no state now, and takes none until more work is queued
+    m_corrections.clear();
+    m_correctionsSolved = 0;
+    m_correctionsTaken = 0;
+  }
   m_database.clear();
   m_keyframes.clear();
   m_pending.clear();
@@ -325,10 +484,65 @@ void LoopCloser::clear()
 
 double LoopCloser::memoryBytes() const
 {
+  if (m_thread.joinable()) {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    return m_publishedBytes;
+  }
+  return heldBytes();
+}
+
+double LoopCloser::heldBytes() const
+{
   double bytes = m_database.memoryBytes() + mapNodesHeapBytes(m_keyframes) + vectorHeapBytes(m_loopConstraints);
   for (const auto &entry : m_keyframes) {
     bytes += entry.second.features.memoryBytes();
   }
   return bytes;
+}
+
+LoopStatistics LoopCloser::statistics() const
+{
+  LoopStatistics s;
+  if (m_thread.joinable()) {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    s = m_published;
+  } else {
+    s = m_stats;
+  }
+  s.lastCorrectionMs = m_applied.lastCorrectionMs;
+  s.correctionMsMax = m_applied.correctionMsMax;
+  s.globalBaStarted = m_applied.globalBaStarted;
+  s.globalBaApplied = m_applied.globalBaApplied;
+  s.globalBaSecondsMax = m_applied.globalBaSecondsMax;
+  s.globalBaRmsBeforePx = m_applied.globalBaRmsBeforePx;
+  s.globalBaRmsAfterPx = m_applied.globalBaRmsAfterPx;
+  return s;
+}
+
+void LoopCloser::recordCorrectionApplied(double ms)
+{
+  m_applied.lastCorrectionMs = ms;
+  m_applied.correctionMsMax = std::max(m_applied.correctionMsMax, ms);
+}
+
+void LoopCloser::recordGlobalBundleAdjustment(const GlobalBundleSummary &summary, bool applied)
+{
+  m_applied.globalBaSecondsMax = std::max(m_applied.globalBaSecondsMax, summary.seconds);
+  if (applied) {
+    ++m_applied.globalBaApplied;
+    m_applied.globalBaRmsBeforePx = summary.rmsBeforePx;
+    m_applied.globalBaRmsAfterPx = summary.rmsAfterPx;
+  }
+}
+
+void LoopCloser::resetStatistics()
+{
+  if (m_thread.joinable()) {
+    std::unique_lock<std::mutex> lock(m_queueMutex);
+    waitIdle(lock);
+    m_published = LoopStatistics();
+  }
+  m_stats = LoopStatistics();
+  m_applied = LoopStatistics();
 }
 } // namespace hslam

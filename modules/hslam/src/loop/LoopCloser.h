@@ -25,9 +25,14 @@
   loop.consistency consecutive queries; then LoopVerification.h decides, and a correction rotating the map by more
   than loop.maxRotationCorrectionDeg is refused (aliasing).
 
-  Threading: not thread-safe; the mapping thread owns it (detection and correction run there, after the keyframe).
-  In real time the global bundle adjustment after a correction runs on a thread of its own (runInBackground()),
-  on a copy of the map; the mapping thread collects it (takeBackgroundJob()).
+  Threading. Deterministic runs: not thread-safe; the mapping thread (the caller) owns it, and detection and
+  correction run there after each keyframe (detect(), correct()), in order. Real time (startThread()): the
+  component works on a thread of its own. The mapper's calls (handOver(), removeKeyframe(), queueQuery()) only queue
+  work; the thread makes the loop features, queries the database, verifies candidates and solves the pose graph on a
+  copy of the map's graph (GlobalMap::graphCopy()), and the mapper collects the solution (takeCorrection()) and
+  applies it to the map. A query whose copy predates a correction not yet applied is skipped (its keyframes are
+  queried with the next one), so a solution never undoes another. The global bundle adjustment after a correction
+  runs on a third thread (runInBackground()) on a copy of the map; the mapper collects it (takeBackgroundJob()).
 */
 #ifndef HSLAM_LOOP_LOOP_CLOSER_H
 #define HSLAM_LOOP_LOOP_CLOSER_H
@@ -45,9 +50,13 @@
 #include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
+#include <condition_variable>
+#include <deque>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <set>
+#include <thread>
 #include <vector>
 
 namespace hslam
@@ -91,8 +100,23 @@ struct DetectedLoop {
 class VISP_EXPORT LoopCloser
 {
 public:
+  //! A correction solved on the loop closer's thread, for the mapper to apply.
+  struct Correction {
+    DetectedLoop loop;
+    std::vector<std::pair<int, Sim3d>> solution; //!< the new S_iw of every stored keyframe of the segment
+    double solveMs = 0.;                         //!< wall time of the pose graph on the thread
+  };
+
   //! \e vocabulary must outlive the component.
   LoopCloser(const vpHSlamParameters::Loop &params, const PinholeIntrinsics &K, const OrbVocabulary &vocabulary);
+  //! Stops the thread (its queued work is dropped).
+  ~LoopCloser();
+  LoopCloser(const LoopCloser &) = delete;
+  LoopCloser &operator=(const LoopCloser &) = delete;
+
+  //! Real time: from now on the work runs on the component's own thread (see the class comment).
+  void startThread();
+  bool threaded() const { return m_thread.joinable(); }
 
   /*!
     Hand-over: keyframe \e id left the window. Its loop features are made from \e image and \e samples (the
@@ -102,9 +126,19 @@ public:
   void addKeyframe(int id, int segment, const vpImage<unsigned char> &image, const std::vector<IdepthSample> &samples);
   /*!
     Hand-over of \e kf, leaving \e window now (it is still in it): its image, and as depth samples its own points
-    (final now) and the window's active points seen from it.
+    (final now) and the window's active points seen from it (then addKeyframe(), queued when threaded).
   */
-  void addKeyframe(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window);
+  void handOver(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window);
+  /*!
+    Threaded: query the keyframes handed over so far against \e graph (GlobalMap::graphCopy() of the map now), with
+    \e connected (connectedTo()) and the window's poses, held fixed by a correction.
+  */
+  void queueQuery(GlobalMap graph, std::set<int> connected, std::map<int, SE3d> windowPoses);
+  /*!
+    Threaded: a correction the thread solved, to apply now (false when none). With \e wait, the work queued so far
+    is finished first.
+  */
+  bool takeCorrection(Correction &correction, bool wait);
   /*!
     Keyframes connected to the present, never loop candidates: the window and the keyframes whose points the window
     re-uses now.
@@ -121,8 +155,8 @@ public:
   /*!
     The pose graph of \e loop's segment (stored keyframes free, \e windowPoses fixed: pose-pose edges, strong
     co-visibility, every loop edge so far and the new loop's connections). On success \e solution holds the new
-    similarity S_iw of every stored keyframe of the segment and true is returned; nothing is changed here (the caller
-    applies it, then calls rescale()).
+    similarity S_iw of every stored keyframe of the segment and true is returned; the loop features follow their
+    keyframes' scales, the map is not changed here (the caller applies the solution).
   */
   bool correct(const DetectedLoop &loop, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
                std::vector<std::pair<int, Sim3d>> &solution);
@@ -138,9 +172,7 @@ public:
   std::unique_ptr<GlobalBundleJob> takeBackgroundJob(bool wait);
   //! Stop the background job (a correction would make its result stale).
   void cancelBackgroundJob() { m_globalBa.cancel(); }
-  //! Keyframe \e id's map was divided by \e scale (a correction applied): its loop features follow.
-  void rescale(int id, double scale);
-  //! A culled keyframe leaves the database.
+  //! A culled keyframe leaves the database (queued when threaded).
   void removeKeyframe(int id);
   //! A new map segment: queries start again (stored keyframes stay; candidates come from the same segment only).
   void newSegment();
@@ -148,16 +180,43 @@ public:
   //! stay.
   void clear();
 
-  //! Bytes held: the loop features, the database and the loop edges.
+  //! Bytes held: the loop features, the database and the loop edges (threaded: after the last work done).
   double memoryBytes() const;
-  LoopStatistics &statistics() { return m_stats; }
-  const LoopStatistics &statistics() const { return m_stats; }
+  //! Counters since the start (threaded: after the last work done).
+  LoopStatistics statistics() const;
+  //! The mapper applied a correction in \e ms (on the thread, plus the pose graph's time there).
+  void recordCorrectionApplied(double ms);
+  //! The mapper wrote back (\e applied) or not a global bundle adjustment.
+  void recordGlobalBundleAdjustment(const GlobalBundleSummary &summary, bool applied);
+  void resetStatistics();
 
 private:
   struct Entry {
     LoopKeyframe features;
     int segment = 0;
   };
+  //! Work queued for the thread: a hand-over, a removal or a query.
+  struct Work {
+    enum Kind { handOver, remove, query } kind = handOver;
+    int id = -1;
+    int segment = 0;
+    vpImage<unsigned char> image;
+    std::vector<IdepthSample> samples;
+    GlobalMap graph;
+    std::set<int> connected;
+    std::map<int, SE3d> windowPoses;
+    int correctionsApplied = 0; //!< corrections the mapper had applied when it copied \e graph
+  };
+  void run();
+  //! One piece of work on the thread; true when it solved a correction (\e correction).
+  bool process(Work &work, Correction &correction);
+  void enqueue(Work work);
+  //! Threaded: wait until the queue is empty and the thread idle.
+  void waitIdle(std::unique_lock<std::mutex> &lock);
+  //! Keyframe \e id's map was divided by \e scale (a correction solved): its loop features follow.
+  void rescale(int id, double scale);
+  void dropKeyframe(int id);
+  double heldBytes() const;
   bool query(int id, const GlobalMap &map, const std::set<int> &connected, DetectedLoop &loop);
   bool verifyCandidate(int id, int candidate, const GlobalMap &map, DetectedLoop &loop);
   //! A side of the verification: \e id and its best co-visible keyframes that hold loop features, not \e excluded.
@@ -177,9 +236,26 @@ private:
   int m_keyframeOfLastLoop = 0; //!< m_keyframesInSegment at the last loop (or the segment's start)
   //! Every corrected loop's edges (the measured one and its connections), kept for the next corrections.
   std::vector<PoseGraphEdge> m_loopConstraints;
-  LoopStatistics m_stats;
+  LoopStatistics m_stats; //!< detection and correction counters (the thread's when threaded)
+  //! Counters of what the mapper applied (correction times, global bundle adjustments); the mapper's thread only.
+  LoopStatistics m_applied;
   //! Real time: the global bundle adjustment's thread.
   BackgroundBundleAdjustment m_globalBa;
+
+  // ---- real time: the component's thread. m_queueMutex guards the queue, the corrections, the counters below and
+  // the published statistics; the rest of the state is the thread's while it runs.
+  std::thread m_thread;
+  mutable std::mutex m_queueMutex;
+  std::condition_variable m_wake; //!< work queued, or stop
+  std::condition_variable m_idle; //!< the queue emptied
+  std::deque<Work> m_queue;
+  std::deque<Correction> m_corrections; //!< solved, not taken yet
+  bool m_busy = false;
+  bool m_stop = false;
+  int m_correctionsSolved = 0;  //!< by the thread (the segment's)
+  int m_correctionsTaken = 0;   //!< by the mapper (the segment's)
+  LoopStatistics m_published;   //!< m_stats after the last work done
+  double m_publishedBytes = 0.; //!< heldBytes() after the last work done
 };
 } // namespace hslam
 

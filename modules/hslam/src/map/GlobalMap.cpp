@@ -65,6 +65,28 @@ void GlobalMap::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PoseP
   m_posePose = std::move(edges);
 }
 
+GlobalMap GlobalMap::graphCopy() const
+{
+  GlobalMap copy(m_options);
+  for (const auto &entry : m_keyframes) {
+    const GlobalKeyframe &kf = entry.second;
+    GlobalKeyframe header;
+    header.id = kf.id;
+    header.frameId = kf.frameId;
+    header.segment = kf.segment;
+    header.timestamp = kf.timestamp;
+    header.exposure = kf.exposure;
+    header.cMw = kf.cMw;
+    header.affine = kf.affine;
+    header.culled = kf.culled;
+    copy.m_keyframes.emplace_hint(copy.m_keyframes.end(), entry.first, std::move(header));
+  }
+  copy.m_shared = m_shared;
+  copy.m_posePose = m_posePose;
+  copy.m_culled = m_culled;
+  return copy;
+}
+
 void GlobalMap::addPosePoseEdge(const PosePoseEdge &edge)
 {
   m_posePose.push_back(edge);

@@ -179,6 +179,11 @@ public:
     points follow their host (inverse depths multiplied by the scale: X_camera' = X_camera / s). False when absent.
   */
   bool applySimilarity(int id, const Sim3d &Siw);
+  /*!
+    The map without its points: keyframe poses, segments and culled flags, co-visibility counts and pose-pose edges.
+    What loop detection and the pose graph read, copied so that another thread can read it while this map changes.
+  */
+  GlobalMap graphCopy() const;
   GlobalKeyframe *find(int id);
   const GlobalKeyframe *find(int id) const;
   const std::map<int, GlobalKeyframe> &keyframes() const { return m_keyframes; }

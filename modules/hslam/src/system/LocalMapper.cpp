@@ -14,6 +14,16 @@
 
 namespace hslam
 {
+namespace
+{
+//! Raised while a loop correction runs (LocalMapper::correctingLoop(), read by the tracking thread).
+struct CorrectingFlag {
+  explicit CorrectingFlag(std::atomic<bool> &f) : flag(f) { flag = true; }
+  ~CorrectingFlag() { flag = false; }
+  std::atomic<bool> &flag;
+};
+} // namespace
+
 LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsics &K0, int width, int height,
                          bool photometricCalibration, const OrbVocabulary *vocabulary)
     : m_params(params), m_K0(K0), m_width(width), m_height(height), m_photometricCalibration(photometricCalibration),
@@ -22,6 +32,9 @@ LocalMapper::LocalMapper(const vpHSlamParameters &params, const PinholeIntrinsic
   makeSegmentComponents();
   if (vocabulary && params.system.mode == vpHSlamParameters::modeSlam) {
     m_loop = std::make_unique<LoopCloser>(params.loop, K0, *vocabulary);
+    if (!params.system.deterministic) {
+      m_loop->startThread(); // real time: detection and the pose graph off the mapping thread
+    }
   }
 }
 
@@ -56,7 +69,7 @@ void LocalMapper::reset()
   clear();
   m_keeper.reset();
   if (m_loop) {
-    m_loop->statistics() = LoopStatistics();
+    m_loop->resetStatistics();
   }
 }
 
@@ -168,7 +181,7 @@ void LocalMapper::marginalize(int id)
   m_marginalizedStates.push_back(state);
   if (keepsGlobalMap()) {
     if (m_loop) {
-      m_loop->addKeyframe(*kf, m_keeper.segment(), m_window->keyframes()); // before storing: see below
+      m_loop->handOver(*kf, m_keeper.segment(), m_window->keyframes()); // before storing: see below
     }
     // After storeKeyframe(): a keyframe culled at once leaves the relocalisation index and the loop closer whole.
     if (m_keeper.store(*kf, m_window->keyframes(), pairs)) {
@@ -187,10 +200,32 @@ void LocalMapper::marginalize(int id)
 
 void LocalMapper::closeLoops()
 {
+  if (!m_loop) {
+    return;
+  }
+  if (m_loop->threaded()) {
+    // A correction the loop closer's thread solved since the last keyframe is applied first: the next query then
+    // reads the corrected graph.
+    applySolvedCorrections(false);
+    m_loop->queueQuery(m_keeper.globalMap().graphCopy(), LoopCloser::connectedTo(m_window->keyframes()), windowPoses());
+    return;
+  }
   DetectedLoop loop;
-  if (m_loop && m_loop->detect(m_keeper.globalMap(), LoopCloser::connectedTo(m_window->keyframes()), loop)) {
+  if (m_loop->detect(m_keeper.globalMap(), LoopCloser::connectedTo(m_window->keyframes()), loop)) {
     correctLoop(loop);
   }
+}
+
+bool LocalMapper::applySolvedCorrections(bool wait)
+{
+  bool applied = false;
+  LoopCloser::Correction correction;
+  while (m_loop && m_loop->threaded() && m_loop->takeCorrection(correction, wait)) {
+    collectGlobalBundleAdjustment(false);
+    applyCorrection(correction.loop, correction.solution, std::chrono::steady_clock::now(), correction.solveMs);
+    applied = true;
+  }
+  return applied;
 }
 
 std::map<int, SE3d> LocalMapper::windowPoses() const
@@ -204,32 +239,36 @@ std::map<int, SE3d> LocalMapper::windowPoses() const
 
 bool LocalMapper::correctLoop(const DetectedLoop &loop)
 {
-  struct Flag {
-    std::atomic<bool> &flag;
-    ~Flag() { flag = false; }
-  } correcting{m_correctingLoop};
-  m_correctingLoop = true;
   // A global bundle adjustment of an earlier loop: written back if it has ended; else it goes on (it works on its own
   // copy) until this correction is known to succeed, and is stopped only then (its keyframes move; a new one follows).
   collectGlobalBundleAdjustment(false);
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::pair<int, Sim3d>> solution;
-  if (!m_loop->correct(loop, m_keeper.globalMap(), windowPoses(), solution)) {
-    return false;
+  {
+    CorrectingFlag correcting(m_correctingLoop);
+    if (!m_loop->correct(loop, m_keeper.globalMap(), windowPoses(), solution)) {
+      return false;
+    }
   }
+  applyCorrection(loop, solution, t0, 0.);
+  return true;
+}
+
+void LocalMapper::applyCorrection(const DetectedLoop &loop, const std::vector<std::pair<int, Sim3d>> &solution,
+                                  std::chrono::steady_clock::time_point t0, double solvedElsewhereMs)
+{
+  CorrectingFlag correcting(m_correctingLoop);
   m_loop->cancelBackgroundJob(); // its result would undo this correction
   for (const auto &entry : solution) {
     m_keeper.globalMap().applySimilarity(entry.first, entry.second);
-    m_loop->rescale(entry.first, entry.second.scale());
     publishStoredKeyframe(entry.first, entry.second.scale());
   }
-  LoopStatistics &stats = m_loop->statistics();
-  stats.lastCorrectionMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  stats.correctionMsMax = std::max(stats.correctionMsMax, stats.lastCorrectionMs);
+  const double ms =
+      solvedElsewhereMs + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  m_loop->recordCorrectionApplied(ms);
   VP_HSLAM_LOG(vpHSlamLog::info, "loop " << loop.keyframe << "-" << loop.candidate << " corrected, " << solution.size()
-                                         << " stored keyframes moved, " << stats.lastCorrectionMs << " ms");
+                                         << " stored keyframes moved, " << ms << " ms");
   startGlobalBundleAdjustment();
-  return true;
 }
 
 void LocalMapper::publishStoredKeyframe(int id, double scale)
@@ -263,9 +302,11 @@ void LocalMapper::startGlobalBundleAdjustment()
 
 bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
 {
+  // Waiting: the loop closer's thread finishes its work first (its correction may start an adjustment).
+  const bool corrected = wait && applySolvedCorrections(true);
   std::unique_ptr<GlobalBundleJob> job = m_loop ? m_loop->takeBackgroundJob(wait) : nullptr;
   if (!job) {
-    return false;
+    return corrected;
   }
   finishGlobalBundleAdjustment(*job);
   return true;
@@ -274,17 +315,11 @@ bool LocalMapper::collectGlobalBundleAdjustment(bool wait)
 void LocalMapper::finishGlobalBundleAdjustment(const GlobalBundleJob &job)
 {
   const GlobalBundleSummary &s = job.summary;
-  LoopStatistics &stats = m_loop->statistics();
-  stats.globalBaSecondsMax = std::max(stats.globalBaSecondsMax, s.seconds);
   const std::vector<int> moved = applyGlobalBundleJob(job, m_keeper.globalMap());
   for (int id : moved) {
     publishStoredKeyframe(id, 1.);
   }
-  if (!moved.empty()) {
-    ++stats.globalBaApplied;
-    stats.globalBaRmsBeforePx = s.rmsBeforePx;
-    stats.globalBaRmsAfterPx = s.rmsAfterPx;
-  }
+  m_loop->recordGlobalBundleAdjustment(s, !moved.empty());
   VP_HSLAM_LOG(vpHSlamLog::info, "global bundle adjustment "
                                      << (moved.empty() ? "failed" : "applied") << ": " << s.keyframes << " keyframes ("
                                      << moved.size() << " moved), " << s.points << " points, " << s.observations

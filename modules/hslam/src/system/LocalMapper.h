@@ -36,6 +36,7 @@
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <atomic>
+#include <chrono>
 #include <map>
 #include <memory>
 #include <vector>
@@ -146,12 +147,13 @@ public:
   //! True while a loop correction runs (read by the tracking thread: tracking must not wait for it).
   bool correctingLoop() const { return m_correctingLoop.load(); }
   //! Loop counters since the start (or the last reset()); all zero without a loop closer.
-  const LoopStatistics &loopStatistics() const;
+  LoopStatistics loopStatistics() const;
   //! Bytes the loop closer holds (loop features and their database), counted in marginalizedMemoryBytes().
   double loopMemoryBytes() const;
   /*!
     Real time: write back a background global bundle adjustment that has ended (or wait for the running one when
-    \e wait); true when one was collected (its keyframes' states are then to be taken).
+    \e wait; the loop closer's thread then finishes its queued work first and its corrections are applied); true
+    when something was written back (its keyframes' states are then to be taken).
   */
   bool collectGlobalBundleAdjustment(bool wait);
 
@@ -221,6 +223,15 @@ private:
     relocalisation index and the reported trajectory. Returns false when the optimisation failed (nothing changed).
   */
   bool correctLoop(const DetectedLoop &loop);
+  /*!
+    Apply a solved correction: every stored keyframe of \e solution moves (pose, points), the trajectory follows,
+    a global bundle adjustment may start. \e t0: when the correction started here; \e solvedElsewhereMs: time the
+    loop closer's thread spent on it.
+  */
+  void applyCorrection(const DetectedLoop &loop, const std::vector<std::pair<int, Sim3d>> &solution,
+                       std::chrono::steady_clock::time_point t0, double solvedElsewhereMs);
+  //! Real time: apply the corrections the loop closer's thread solved (with \e wait, after its queued work).
+  bool applySolvedCorrections(bool wait);
   //! A stored keyframe moved: report its pose (and the scale of the move) and refresh its relocalisation points.
   void publishStoredKeyframe(int id, double scale);
   //! After a correction: the global bundle adjustment (loop.globalBundleAdjustment), in order when deterministic,

@@ -94,10 +94,9 @@ bool LocalMapper::keepsGlobalMap() const
   return keepsGlobalMap(m_params.system.mode);
 }
 
-const LocalMapper::LoopStatistics &LocalMapper::loopStatistics() const
+LocalMapper::LoopStatistics LocalMapper::loopStatistics() const
 {
-  static const LoopStatistics none;
-  return m_loop ? m_loop->statistics() : none;
+  return m_loop ? m_loop->statistics() : LoopStatistics();
 }
 
 double LocalMapper::loopMemoryBytes() const
