@@ -26,6 +26,7 @@
 #include "tracking/CoarseTracker.h"
 #include "tracking/HybridTracker.h"
 
+#include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImagePoint.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
@@ -35,7 +36,7 @@
 
 namespace hslam
 {
-class FrameTracker
+class VISP_EXPORT FrameTracker
 {
 public:
   //! Counts of one frame's successful hybrid step (RunStatistics::addHybridFrame).

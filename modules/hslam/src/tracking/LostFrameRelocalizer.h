@@ -33,6 +33,7 @@
 #include "tracking/TrackingMap.h"
 #include "tracking/WindowRelocalization.h"
 
+#include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <vector>
@@ -44,11 +45,11 @@ namespace hslam
   (\e preferred first when it is one), ORB matching and PnP RANSAC with tracking.relocalizationMinInliers; logged at
   debug level. Shared by relocalisation and localisation-only.
 */
-RelocalizationResult recognizePlace(int frameId, RelocalizationFrame &features, TrackingMap &map,
-                                    const vpHSlamParameters::Tracking &params, const PinholeIntrinsics &K,
-                                    int preferred = -1);
+VISP_EXPORT RelocalizationResult recognizePlace(int frameId, RelocalizationFrame &features, TrackingMap &map,
+                                                const vpHSlamParameters::Tracking &params, const PinholeIntrinsics &K,
+                                                int preferred = -1);
 
-class LostFrameRelocalizer
+class VISP_EXPORT LostFrameRelocalizer
 {
 public:
   //! A lost frame placed by bag-of-words + PnP in the stored map.

@@ -31,6 +31,7 @@
 #include "tracking/Relocalizer.h"
 #include "tracking/TrackingMap.h"
 
+#include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <memory>
@@ -38,7 +39,7 @@
 
 namespace hslam
 {
-class MapLocalizer
+class VISP_EXPORT MapLocalizer
 {
 public:
   //! Outcome of localize().

@@ -28,6 +28,7 @@
 #include "math/SE3.h"
 #include "tracking/CoarseTracker.h"
 
+#include <visp3/core/vpConfig.h>
 #include <visp3/core/vpImage.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
@@ -38,7 +39,7 @@
 
 namespace hslam
 {
-class MonocularInitializer
+class VISP_EXPORT MonocularInitializer
 {
 public:
   //! A frame seen while initialising, kept as its raw input (cheap) to be tracked once the map exists.

@@ -50,13 +50,14 @@
 #include "tracking/LostFrameRelocalizer.h"
 #include "tracking/TrackingMap.h"
 
+#include <visp3/core/vpConfig.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
 #include <optional>
 
 namespace hslam
 {
-class TrackingStateMachine
+class VISP_EXPORT TrackingStateMachine
 {
 public:
   enum class Phase { newSegment, tracking, relocalizing, continuedMotion, lost };
