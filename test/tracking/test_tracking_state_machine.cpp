@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <memory>
+#include <vector>
 
 using namespace hslam;
 
@@ -27,24 +28,39 @@ public:
   void localMapReference(const std::vector<int> &, const SE3d &, std::vector<CoarseTrackerPoint> &) override {}
   int closestKeyframe(const SE3d &, const std::vector<int> &) override { return -1; }
 };
+
+//! A row of a transition table: from, event, expected next phase.
+struct Row {
+  Phase from;
+  Event event;
+  Phase to;
+};
+
+void expectRows(const std::vector<Row> &rows)
+{
+  for (const Row &r : rows) {
+    EXPECT_EQ(TrackingStateMachine::next(r.from, r.event), r.to)
+        << "from " << static_cast<int>(r.from) << " on event " << static_cast<int>(r.event);
+  }
+}
 } // namespace
 
 TEST(TrackingStateMachine, TransitionTableRows)
 {
-  EXPECT_EQ(TrackingStateMachine::next(Phase::newSegment, Event::initialized), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::aligned), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::failed), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::failedTooOften), Phase::relocalizing);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::failedForGood), Phase::lost);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::noReference), Phase::lost);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::noReference), Phase::lost);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::refused), Phase::relocalizing);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::timedOut), Phase::lost);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::relocalized), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::relocalizedMoving), Phase::continuedMotion);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::continuedMotion, Event::aligned), Phase::continuedMotion);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::continuedMotion, Event::failedForGood), Phase::lost);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::continuedMotion, Event::motionUsed), Phase::tracking);
+  expectRows({{Phase::newSegment, Event::initialized, Phase::tracking},
+              {Phase::tracking, Event::aligned, Phase::tracking},
+              {Phase::tracking, Event::failed, Phase::tracking},
+              {Phase::tracking, Event::failedTooOften, Phase::relocalizing},
+              {Phase::tracking, Event::failedForGood, Phase::lost},
+              {Phase::tracking, Event::noReference, Phase::lost},
+              {Phase::relocalizing, Event::noReference, Phase::lost},
+              {Phase::relocalizing, Event::refused, Phase::relocalizing},
+              {Phase::relocalizing, Event::timedOut, Phase::lost},
+              {Phase::relocalizing, Event::relocalized, Phase::tracking},
+              {Phase::relocalizing, Event::relocalizedMoving, Phase::continuedMotion},
+              {Phase::continuedMotion, Event::aligned, Phase::continuedMotion},
+              {Phase::continuedMotion, Event::failedForGood, Phase::lost},
+              {Phase::continuedMotion, Event::motionUsed, Phase::tracking}});
   for (Phase from : {Phase::newSegment, Phase::tracking, Phase::relocalizing, Phase::continuedMotion, Phase::lost}) {
     EXPECT_EQ(TrackingStateMachine::next(from, Event::segmentEnded), Phase::newSegment);
   }
@@ -52,12 +68,12 @@ TEST(TrackingStateMachine, TransitionTableRows)
 
 TEST(TrackingStateMachine, PairsOutsideTheTableKeepThePhase)
 {
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::initialized), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::timedOut), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::tracking, Event::motionUsed), Phase::tracking);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::newSegment, Event::noReference), Phase::newSegment);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::relocalizing, Event::failedTooOften), Phase::relocalizing);
-  EXPECT_EQ(TrackingStateMachine::next(Phase::lost, Event::relocalized), Phase::lost);
+  expectRows({{Phase::tracking, Event::initialized, Phase::tracking},
+              {Phase::tracking, Event::timedOut, Phase::tracking},
+              {Phase::tracking, Event::motionUsed, Phase::tracking},
+              {Phase::newSegment, Event::noReference, Phase::newSegment},
+              {Phase::relocalizing, Event::failedTooOften, Phase::relocalizing},
+              {Phase::lost, Event::relocalized, Phase::lost}});
 }
 
 TEST(TrackingStateMachine, NoReferenceEndsTheSegment)
