@@ -1,39 +1,50 @@
 /*
  * H-SLAM for ViSP.
  */
+// The conductor's tracking side (SlamSystem, the caller's thread): construction, the per-frame order of the
+// components, segments, reset, map files. See SlamSystem.h.
 #include "system/SlamSystem.h"
 
-#include "mapping/TwoViewInitializer.h"
-#include "system/LocalMapper.h"
-#include "tracking/MotionContinuation.h"
+#include "features/OrbVocabulary.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <sstream>
 
 namespace hslam
 {
 namespace
 {
-/*!
-  After a relocalisation where the camera kept moving (a vehicle found again by its continued motion), the relocalised
-  frame and the next two become keyframes. The window's keyframes are then metres behind, the points it can still
-  track are distant, and the flow-based keyframe rule waited up to 9 frames: KITTI 06 with frames 30-39 black drifted
-  to 0.12 and 0.69 m ATE in 2 of 6 point budgets (0.02-0.04 m with these keyframes; 7 covers x 6 budgets: none above
-  0.04 m). Not after other relocalisations: a hand-held camera comes back near the window, and the same keyframes
-  pushed good ones out of it (7-Scenes, frames 120-160 black: 0.050-0.157 m instead of 0.037-0.089 m).
-*/
-constexpr int kKeyframesAfterContinuedMotion = 3;
-
-//! DSO's keyframe flow weights are expressed for a 640 x 480 image: (640 + 480) pixels.
-constexpr double kDsoReferenceWidthPlusHeight = 640. + 480.;
+//! Relative tolerance on the intrinsics a loaded map must share with the system (both went through a text file).
+constexpr double kIntrinsicsTolerance = 1e-6;
 
 std::string where(int line)
 {
   return std::string(__FILE__) + ":" + std::to_string(line) + ": ";
+}
+
+bool close(double a, double b)
+{
+  return std::fabs(a - b) <= kIntrinsicsTolerance * std::max(1., std::fabs(a));
+}
+
+std::string describe(const MapCamera &c)
+{
+  char text[160];
+  std::snprintf(text, sizeof(text), "%dx%d, fx %.6g fy %.6g cx %.6g cy %.6g", c.width, c.height, c.fx, c.fy, c.cx,
+                c.cy);
+  return text;
+}
+
+std::string hex(std::uint64_t id)
+{
+  char text[24];
+  std::snprintf(text, sizeof(text), "%016llx", static_cast<unsigned long long>(id));
+  return text;
 }
 } // namespace
 
@@ -44,10 +55,9 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
 {
   m_params.validate();
   const bool calibrated = m_preprocessor.usesPhotometricCalibration();
-  OrbExtractorOptions orbOptions;
-  orbOptions.maxFeatures = m_params.initializer.orbFeatures;
-  m_initializer = std::make_unique<TwoViewInitializer>(m_params.initializer, m_preprocessor.intrinsics(), orbOptions);
-  m_tracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
+  const PinholeIntrinsics &K = m_preprocessor.intrinsics();
+  TrackingMap &map = *this; // what the tracking components may read of the back end
+  m_initializer = std::make_unique<MonocularInitializer>(m_params, K, calibrated);
   m_preparedTracker = std::make_unique<CoarseTracker>(m_params.tracker, calibrated);
   // Relocalisation needs the keyframe database: with hybrid / indirect tracking, and with direct tracking in the
   // modes that keep a global map (vo-reuse, slam), where a lost camera is found again in the stored keyframes.
@@ -67,16 +77,22 @@ SlamSystem::SlamSystem(const vpHSlamCamera &camera, const vpHSlamParameters &par
       m_vocabulary = std::make_unique<vpHSlamVocabulary>(vpHSlamVocabulary::load(path));
     }
   }
-  m_mapper = std::make_unique<LocalMapper>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
-                                           m_preprocessor.height(), calibrated,
+  m_mapper = std::make_unique<LocalMapper>(m_params, K, m_preprocessor.width(), m_preprocessor.height(), calibrated,
                                            m_vocabulary ? &m_vocabulary->impl() : nullptr);
   // The frame's ORB features: hybrid / indirect tracking, localisation-only, and relocalisation with direct tracking
   // (frames are then described only while the camera is lost).
   if (!direct || m_params.system.localizationOnly || relocalizes) {
-    m_hybrid = std::make_unique<HybridTracker>(m_params, m_preprocessor.intrinsics(), m_preprocessor.width(),
-                                               m_preprocessor.height());
-    m_windowRelocalization = std::make_unique<WindowRelocalization>(m_preprocessor.intrinsics());
+    m_hybrid = std::make_unique<HybridTracker>(m_params, K, m_preprocessor.width(), m_preprocessor.height());
+    m_relocalizer = std::make_unique<LostFrameRelocalizer>(m_params.tracking, K, *m_hybrid, map);
+    m_localizer = std::make_unique<MapLocalizer>(m_params, K, calibrated, *m_hybrid, map);
   }
+  m_frameTracker = std::make_unique<FrameTracker>(m_params, calibrated, m_preprocessor.width(), m_preprocessor.height(),
+                                                  m_hybrid.get());
+  const bool seedFromStoredMap =
+      m_params.tracking.seedFromStoredMap && m_mapper->keepsGlobalMap() && m_params.globalMap.reuse;
+  m_tracking =
+      std::make_unique<TrackingStateMachine>(m_params, *m_frameTracker, m_relocalizer.get(), map, seedFromStoredMap,
+                                             m_vocabulary != nullptr && m_params.tracking.relocalize);
   if (!m_params.system.deterministic) {
     startMappingThread();
   }
@@ -124,20 +140,16 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
   }
   vpHSlam::State state;
   if (m_params.system.localizationOnly) {
-    state = localizeInLoadedMap(frame);
+    state = localize(frame);
     m_cpuTrack += threadCpuMs() - c1;
-  } else if (!m_initialized) {
+  } else if (m_tracking->phase() == TrackingStateMachine::Phase::newSegment) {
     state = initialize(frame, I, exposure);
     m_runStats.addInitializationMs(nowMs() - t0);
     m_cpuInitialize += threadCpuMs() - c1;
   } else {
     m_cpuLastJob = 0.;
     state = trackInitialized(frame); // records its own tracking time (mapping excluded)
-    if (m_params.system.deterministic) {
-      m_cpuTrack += threadCpuMs() - c1 - m_cpuLastJob;
-    } else {
-      m_cpuTrack += threadCpuMs() - c1;
-    }
+    m_cpuTrack += threadCpuMs() - c1 - (m_params.system.deterministic ? m_cpuLastJob : 0.);
   }
   if (!m_params.system.deterministic && (correctingLoopBefore || m_mapper->correctingLoop())) {
     m_runStats.addTrackingMsDuringLoopCorrection(nowMs() - t0); // real time: the frame overlapped a correction
@@ -151,18 +163,87 @@ vpHSlam::State SlamSystem::track(const vpImage<unsigned char> &I, double timesta
   return state;
 }
 
-void SlamSystem::adoptPreparedReference()
+vpHSlam::State SlamSystem::localize(const FramePtr &frame)
 {
-  std::unique_lock<std::mutex> lock(m_referenceMutex, std::try_to_lock);
-  if (!lock.owns_lock() || !m_preparedReady) {
-    return; // the back end is preparing one: keep the current reference for this frame
+  const MapLocalizer::Result r = m_localizer->localize(frame);
+  m_relocAttempts += r.recognitionTried ? 1 : 0;
+  m_relocSuccesses += r.recognized ? 1 : 0;
+  m_runStats.addTrackingMs(nowMs() - m_frameStartMs);
+  if (!r.located) {
+    return vpHSlam::stateLost;
   }
-  m_preparedTracker->carryRecentRmseFrom(*m_tracker); // DSO's lastCoarseRMSE belongs to the system
-  std::swap(m_tracker, m_preparedTracker);
-  m_trackerRefKeyframe = m_preparedRefKeyframe;
-  m_trackerRefAffine = m_preparedRefAffine;
-  m_trackerRefExposure = m_preparedRefExposure;
-  m_preparedReady = false;
+  // Anchored to the world (no keyframe of this run): the trajectory is in the loaded map's coordinates.
+  m_recorder.addFrame(frame->id, frame->timestamp, -1, r.cMw.inverse(), m_segment);
+  return vpHSlam::stateTracking;
+}
+
+vpHSlam::State SlamSystem::initialize(const FramePtr &frame, const vpImage<unsigned char> &I, double exposure)
+{
+  if (!m_initializer->addFrame(frame, I, exposure)) {
+    return vpHSlam::stateInitializing;
+  }
+  // Nothing is queued for mapping while initialising: the back end is idle and may be driven from here.
+  synchronize();
+  std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
+  if (!makeFirstMap(frame)) {
+    return vpHSlam::stateInitializing;
+  }
+  publishAfterKeyframe();
+  adoptPreparedReference();
+  backfill(m_initializer->result(), frame->id);
+  m_initializer->reset();
+  m_frameTracker->startSegment(frame->affine);
+  // The frame before the second keyframe, when it has a pose (the first keyframe, or tracked backwards), gives the
+  // next frame its velocity: starting from no motion, every third KITTI frame (3.6 m ahead) converged to a camera
+  // that had hardly moved.
+  SE3d wMbefore;
+  m_tracking->startSegment(frame->id, m_recorder.framePose(frame->id - 1, wMbefore) ? frame->id - 1 : -1);
+  ++m_segmentsStarted;
+  return vpHSlam::stateTracking;
+}
+
+bool SlamSystem::makeFirstMap(const FramePtr &frame)
+{
+  const TwoViewInitialization &init = m_initializer->result();
+  const FramePtr first = m_initializer->firstFrame();
+  const int firstId = m_keyframeCount.load();
+  if (!m_mapper->initialize(first, firstId, frame, firstId + 1, init, m_segmentOrigin)) {
+    VP_HSLAM_LOG(vpHSlamLog::info, "initialisation from frames " << init.firstFrameId << " and " << frame->id
+                                                                 << " gave too few points; trying again");
+    m_mapper->clear();
+    m_initializer->restartFrom(frame);
+    return false;
+  }
+  m_keyframeCount += 2;
+  m_recorder.addKeyframe(firstId, first->id, first->timestamp, first->cMw.inverse(), m_segment);
+  m_recorder.addKeyframe(firstId + 1, frame->id, frame->timestamp, frame->cMw.inverse(), m_segment);
+  m_recorder.addFrame(first->id, first->timestamp, firstId, SE3d(), m_segment);
+  m_recorder.addFrame(frame->id, frame->timestamp, firstId + 1, SE3d(), m_segment);
+  if (first->id != frame->id) {
+    ++m_trackedFrames; // the first frame got its pose now
+  }
+  VP_HSLAM_LOG(vpHSlamLog::info, "initialised from frames " << init.firstFrameId << " and " << frame->id << " ("
+                                                            << init.points.size() << " points, parallax "
+                                                            << init.parallaxDeg << " deg), segment " << m_segment);
+  return true;
+}
+
+void SlamSystem::backfill(const TwoViewInitialization &init, int secondFrameId)
+{
+  const int secondKeyframe = m_keyframeCount.load() - 1;
+  const auto setReference = [&](CoarseTracker &tracker, AffineBrightness &affine) {
+    int id = -1;
+    double exposure = 1.;
+    return m_mapper->prepareTrackingReference(tracker, id, affine, exposure) && id == secondKeyframe;
+  };
+  const auto preprocess = [&](const MonocularInitializer::PendingFrame &p) {
+    return m_preprocessor.process(p.I, p.timestamp, p.exposure, p.id);
+  };
+  for (const MonocularInitializer::BackfilledFrame &f :
+       m_initializer->backfill(init.c2Mc1, init.firstFrameId, secondFrameId, setReference, preprocess)) {
+    m_recorder.addFrame(f.id, f.timestamp, secondKeyframe, f.refMc, m_segment);
+    ++m_trackedFrames;
+  }
 }
 
 vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
@@ -173,266 +254,43 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
     return vpHSlam::stateInitializing; // the map is started again: not a loss of tracking
   }
   adoptPreparedReference();
-  if (m_trackerRefKeyframe < 0) {
+  const int referenceKeyframe = m_frameTracker->referenceKeyframe();
+  const TrackingStateMachine::Outcome out = m_tracking->track(frame);
+  for (const FrameTracker::HybridStep &s : m_frameTracker->takeHybridSteps()) {
+    m_runStats.addHybridFrame(s.matches, s.inliers, s.geometricWeight);
+  }
+  m_relocAttempts += out.relocalizationAttempted ? 1 : 0;
+  m_relocSuccesses += out.relocalized ? 1 : 0;
+  if (out.report == TrackingStateMachine::Outcome::endSegment) {
     declareLost();
-    return vpHSlam::stateLost;
   }
-  // Motion history from the recorded poses (DSO: from the frame shells, under the pose lock).
-  CoarseMotionHistory history, continued, beforeLoss;
-  SE3d wMref, wMlast, wMprelast;
-  wMref = m_recorder.keyframePose(m_trackerRefKeyframe);
-  if (m_lastFrameId >= 0 && m_prelastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast) &&
-      m_recorder.framePose(m_prelastFrameId, wMprelast)) {
-    history.valid = true;
-    history.lastMref = wMlast.inverse() * wMref;
-    history.prelastMref = wMprelast.inverse() * wMref;
-  } else if (m_lastFrameId >= 0 && m_recorder.framePose(m_lastFrameId, wMlast)) {
-    // One frame only: no velocity yet; start from the last pose (DSO tries identity from the reference). After a
-    // relocalisation where the motion continued, that motion (KITTI 06, frames 20-24 black, budget 510: from no
-    // motion the next two frames were placed 12 and 30 px on instead of about 60, and the run ended at 0.25 m).
-    history.valid = true;
-    history.lastMref = wMlast.inverse() * wMref;
-    history.prelastMref = m_continuedMotion ? m_continuedMotion->inverse() * history.lastMref : history.lastMref;
-  }
-  m_continuedMotion.reset();
-  history.lastAffine = m_lastAffine;
-
-  if (m_relocalizing) {
-    if (frame->timestamp - m_lostSince > m_params.tracking.relocalizationTimeout) {
-      VP_HSLAM_LOG(vpHSlamLog::warning, "frame " << frame->id << ": relocalisation failed for "
-                                                 << frame->timestamp - m_lostSince
-                                                 << " s; a new map segment will be initialised");
-      declareLost();
-      m_runStats.addTrackingMs(nowMs() - t0);
-      return vpHSlam::stateLost;
-    }
-    bool described = false;
-    beforeLoss = history;
-    if (!relocalizePose(frame, history, described) && history.valid) {
-      // No place recognised: after a short loss the camera is often still near its last pose, where the hybrid
-      // step (guided matching, then matching without a prediction and PnP against the window's corners) and the
-      // joint alignment can find it; the same checks as any frame decide. Measured on 7-Scenes with frames
-      // 120-125 black, fast preset: BoW candidates gave at most 15 matches, this found the camera at once.
-      // A camera on a vehicle kept moving instead: tried second, below.
-      continued = described ? continueMotion(history, lostSteps(frame->id)) : CoarseMotionHistory();
-      history.prelastMref = history.lastMref;
-    }
-  }
-  SE3d newMref;
-  AffineBrightness affine;
-  CoarseTrackingResult result;
-  bool success = estimatePose(frame, history, newMref, affine, result);
-  const bool relocalizedNow = m_relocalizing;
-  // The window cannot hold the relocalised pose when it has (almost) no point left: a turn in place made keyframes
-  // that triangulated nothing (3-lap synthetic loop: 198, 73, 29, then 0 window points, while bag-of-words + PnP
-  // placed every lost frame in the stored map with 73-144 inliers). Two consecutive fixes that agree are then taken
-  // as they are, and the frame becomes a keyframe: the stored points it sees are re-activated in it (early
-  // adoption, LocalMapper::reuseGlobalPoints) and the window has points again.
-  const bool seedFromStoredMap =
-      m_relocalizing && !success && m_storedMapFix.frameId == frame->id && m_storedMapFix.agreesWithPrevious &&
-      m_params.tracking.seedFromStoredMap && m_mapper->keepsGlobalMap() && m_params.globalMap.reuse &&
-      (result.status == CoarseTrackingStatus::noReference || result.status == CoarseTrackingStatus::tooFewResiduals);
-  if (seedFromStoredMap) {
-    newMref = m_storedMapFix.cMw * wMref;
-    affine = m_lastAffine;
-    success = true;
-  }
-  if (m_relocalizing && !seedFromStoredMap) {
-    bool confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, "");
-    if ((!success || !confirmed) && continued.valid) {
-      success = estimatePose(frame, continued, newMref, affine, result);
-      confirmed = relocalizationConfirmed(frame, success, newMref * wMref.inverse(), result, " (motion continued)");
-      if (success && !confirmed) { // a failed alignment has not moved from the prediction: nothing to check
-        const ContinuedMotionCheck check = checkContinuedMotion(continued, newMref);
-        VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": alignment from the continued motion ended "
-                                                 << check.stepShare << " of a step and " << check.rotationDeg
-                                                 << " deg from it" << (check.kept ? ": the camera kept moving" : ""));
-        if (check.kept) {
-          confirmed = true;
-          m_continuedMotion = continued.lastMref * continued.prelastMref.inverse();
-          m_forcedKeyframes = kKeyframesAfterContinuedMotion;
-        }
-      }
-    }
-    if (!success || !confirmed) {
-      m_runStats.addTrackingMs(nowMs() - t0);
-      return vpHSlam::stateLost; // the relocalised pose did not hold against the map: try the next frame
-    }
-  }
-  if (m_relocalizing && !m_continuedMotion && beforeLoss.valid && success) {
-    // Placed by the map's points where the camera's motion continued would have put it: the camera kept moving, and
-    // the next frame starts from that motion too, not from none (KITTI 06, hybrid tracking, frames 35-39 black,
-    // budget 505: the window's points placed the car right, the frame after was placed 0.4 m on instead of 1.2 m and
-    // the run ended at 0.117 m; 0.028 m with the motion kept).
-    const CoarseMotionHistory expected = continueMotion(beforeLoss, lostSteps(frame->id));
-    if (expected.valid && checkContinuedMotion(expected, newMref).kept) {
-      m_continuedMotion = expected.lastMref * expected.prelastMref.inverse();
-    }
-  }
-  if (m_relocalizing) {
-    m_relocalizing = false;
-    if (m_windowRelocalization) {
-      m_windowRelocalization->clear(); // the window moves on: its described keyframes would go stale
-    }
-    ++m_relocSuccesses;
-    VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": relocalised after " << frame->timestamp - m_lostSince
-                                            << " s, tracking resumes in the same map"
-                                            << (seedFromStoredMap ? "; the window is seeded from the stored map" : ""));
-  }
-  const bool finite = newMref.translation().allFinite() && newMref.unitQuaternion().coeffs().allFinite() &&
-                      std::isfinite(affine.a) && std::isfinite(affine.b);
-  if (!success) {
-    ++m_consecutiveFailures;
-    VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": direct alignment failed ("
-                                             << coarseTrackingStatusName(result.status) << "), "
-                                             << m_consecutiveFailures << " in a row");
-  } else {
-    m_consecutiveFailures = 0;
-  }
-  if (finite && m_consecutiveFailures > m_params.system.maxTrackingFailures && m_vocabulary && m_hybrid &&
-      m_params.tracking.relocalize && m_mapper->indexesKeyframes()) {
-    // The map stays: lost frames try relocalisation into it (frames until then are reported lost).
+  if (out.report != TrackingStateMachine::Outcome::tracked) {
     m_runStats.addTrackingMs(nowMs() - t0);
-    VP_HSLAM_LOG(vpHSlamLog::info, "frame " << frame->id << ": tracking lost ("
-                                            << coarseTrackingStatusName(result.status) << "); relocalising");
-    m_relocalizing = true;
-    m_lostSince = frame->timestamp;
-    m_storedMapFix = StoredMapFix();
-    m_continuedMotion.reset();
-    m_consecutiveFailures = 0;
     return vpHSlam::stateLost;
   }
-  if (!finite || m_consecutiveFailures > m_params.system.maxTrackingFailures) {
-    m_runStats.addTrackingMs(nowMs() - t0);
-    VP_HSLAM_LOG(vpHSlamLog::warning, "frame " << frame->id << ": tracking lost ("
-                                               << coarseTrackingStatusName(result.status)
-                                               << "); a new map segment will be initialised");
-    declareLost();
-    return vpHSlam::stateLost;
-  }
-  frame->affine = affine;
-  frame->cMw = newMref * wMref.inverse();
-  const SE3d refMc = newMref.inverse();
-  m_recorder.addFrame(frame->id, frame->timestamp, m_trackerRefKeyframe, refMc, m_segment);
-  m_lastAffine = affine;
-  // After a relocalisation the last tracked frame is from before the loss: no velocity to extrapolate from it
-  // (measured on 7-Scenes with frames 120-135 black: the jump across the loss taken as one frame's motion sent the
-  // next frames' predictions tens of pixels off and the window collapsed within 8 frames).
-  m_prelastFrameId = relocalizedNow ? -1 : m_lastFrameId;
-  m_lastFrameId = frame->id;
-
-  // A failed alignment keeps the predicted pose (DSO) but neither makes a keyframe nor feeds mapping.
-  const bool needKeyframe = seedFromStoredMap || (success && keyframeNeeded(frame, result));
-  if (seedFromStoredMap) {
-    m_framesSinceKeyframeRequest = 0; // as keyframeNeeded() does for a keyframe it asks for
-  }
+  m_recorder.addFrame(frame->id, frame->timestamp, referenceKeyframe, out.refMc, m_segment);
   m_runStats.addTrackingMs(nowMs() - t0);
-  if (success) {
+  if (out.aligned) {
     MappingJob job;
     job.frame = frame;
-    job.referenceKeyframe = m_trackerRefKeyframe;
-    job.refMc = refMc;
-    job.needKeyframe = needKeyframe;
-    job.seedKeyframe = seedFromStoredMap ? m_storedMapFix.keyframeId : -1;
-    job.relocalized = relocalizedNow;
+    job.referenceKeyframe = referenceKeyframe;
+    job.refMc = out.refMc;
+    job.needKeyframe = out.needKeyframe;
+    job.seedKeyframe = out.seedKeyframe;
+    job.relocalized = out.relocalized;
     deliver(std::move(job));
   }
   return vpHSlam::stateTracking;
 }
 
-bool SlamSystem::estimatePose(const FramePtr &frame, CoarseMotionHistory history, SE3d &newMref,
-                              AffineBrightness &affine, CoarseTrackingResult &result)
+void SlamSystem::adoptPreparedReference()
 {
-  if (!m_hybrid || (m_params.tracking.mode == vpHSlamParameters::trackingDirect && !m_relocalizing)) {
-    return m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
+  std::unique_lock<std::mutex> lock(m_referenceMutex, std::try_to_lock);
+  if (!lock.owns_lock() || !m_preparedReady) {
+    return; // the back end is preparing one: keep the current reference for this frame
   }
-  // Hybrid / indirect tracking, or a lost camera with direct tracking: the joint step, whose ORB inliers confirm a
-  // relocalised pose.
-  const bool indirectOnly = m_params.tracking.mode == vpHSlamParameters::trackingIndirect;
-  m_hybrid->extract(frame->raw);
-  m_hybrid->indirectStep(m_tracker->referenceFeatures(), CoarseTracker::predictConstantVelocity(history), m_indirect);
-  bool success = false;
-  if (m_indirect.usable) {
-    m_indirect.term.poseFromGeometryOnly = indirectOnly;
-    m_tracker->setGeometricTerm(&m_indirect.term);
-    history.hasIndirectPose = true;
-    history.indirectMref = m_indirect.newMref;
-  }
-  if (indirectOnly) {
-    // The pose is the geometric one; the photometric side only estimates (a, b) and the keyframe criteria.
-    newMref = m_indirect.newMref;
-    affine = history.lastAffine;
-    success = m_indirect.usable && m_tracker->track(*frame, newMref, affine, result);
-    if (!m_indirect.usable) {
-      result.status = CoarseTrackingStatus::tooFewResiduals;
-    }
-  } else {
-    success = m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
-  }
-  m_tracker->setGeometricTerm(nullptr);
-  if (success) {
-    m_runStats.addHybridFrame(m_indirect.matches, m_indirect.inliers, result.geometricWeight);
-  }
-  std::vector<vpImagePoint> matched;
-  if (success && m_indirect.usable) {
-    matched.reserve(m_indirect.term.uv.size());
-    for (const Eigen::Vector2d &uv : m_indirect.term.uv) {
-      matched.emplace_back(uv.y(), uv.x());
-    }
-  }
-  std::lock_guard<std::mutex> lock(m_imageMutex);
-  m_lastMatches.swap(matched);
-  return success;
-}
-
-bool SlamSystem::keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result)
-{
-  ++m_framesSinceKeyframeRequest;
-  const vpHSlamParameters::Tracker &p = m_params.tracker;
-  double aji = 1., bji = 0.;
-  AffineBrightness::transfer(m_trackerRefExposure, m_trackerRefAffine, frame->exposure, frame->affine, aji, bji);
-  // DSO FullSystem::addActiveFrame: weighted optical flow + brightness change above 1, or the residual doubled.
-  // DSO's flow weights are given per (w + h) of a 640x480 image (setting_maxShiftWeightT = 0.04 (640 + 480)) and
-  // divided by the actual w + h, so the same share of the image diagonal triggers a keyframe at any size.
-  const double sizeScale =
-      kDsoReferenceWidthPlusHeight / static_cast<double>(m_preprocessor.width() + m_preprocessor.height());
-  const double score =
-      sizeScale * (p.maxShiftWeightT * std::sqrt(result.flowT) + p.maxShiftWeightR * std::sqrt(result.flowR) +
-                   p.maxShiftWeightRT * std::sqrt(result.flowRT)) +
-      p.maxAffineWeight * std::fabs(std::log(aji));
-  const double firstRmse = m_tracker->firstRmse();
-  bool need = score > 1. || (std::isfinite(firstRmse) && p.keyframeResidualFactor * firstRmse < result.rmse[0]);
-  if (p.maxFramesBetweenKeyframes > 0 && m_framesSinceKeyframeRequest >= p.maxFramesBetweenKeyframes) {
-    need = true;
-  }
-  if (m_forcedKeyframes > 0) {
-    --m_forcedKeyframes;
-    need = true;
-  }
-  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": flow T " << std::sqrt(result.flowT) << " RT "
-                                           << std::sqrt(result.flowRT) << " px, log a_ji " << std::log(aji) << ", rmse "
-                                           << result.rmse[0] << " (first " << firstRmse << "), keyframe score " << score
-                                           << ", hypotheses " << result.hypothesesTried << ", iterations "
-                                           << result.iterations << (need ? " -> keyframe" : ""));
-  if (need) {
-    m_framesSinceKeyframeRequest = 0;
-  }
-  return need;
-}
-
-void SlamSystem::dropPreparedReferenceAndSnapshot()
-{
-  {
-    std::lock_guard<std::mutex> lock(m_referenceMutex);
-    m_preparedReady = false;
-  }
-  {
-    std::lock_guard<std::mutex> lock(m_snapshotMutex);
-    m_snapshotPoints.clear();
-    m_snapshotImmature = 0;
-    m_snapshotMemoryMb = 0.;
-    m_snapshotKeyframesHeld = 0;
-  }
+  m_frameTracker->adoptReference(m_preparedTracker, m_preparedRefKeyframe, m_preparedRefAffine, m_preparedRefExposure);
+  m_preparedReady = false;
 }
 
 void SlamSystem::declareLost(bool discardSegment)
@@ -440,10 +298,7 @@ void SlamSystem::declareLost(bool discardSegment)
   // Keep the old segment (trajectory, keyframes) and chain the next one to the last known pose; a segment whose
   // initialisation proved wrong is discarded instead (DSO resets after a failed initialisation).
   synchronize();
-  m_forcedKeyframes = 0;
-  if (m_windowRelocalization) {
-    m_windowRelocalization->clear(); // the window goes with the segment
-  }
+  m_tracking->endSegment();
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     // A global bundle adjustment still running on the closing segment is waited for and written back (its keyframes
@@ -475,27 +330,30 @@ void SlamSystem::declareLost(bool discardSegment)
       m_segmentOrigin = wMlast;
     }
   }
-  m_trackerRefKeyframe = -1;
-  m_initialized = false;
-  m_relocalizing = false;
-  m_storedMapFix = StoredMapFix();
-  m_continuedMotion.reset();
+  m_frameTracker->dropReference();
   m_initializer->reset();
-  m_initFirstFrame.reset();
-  m_pendingFrames.clear();
-  m_lastFrameId = m_prelastFrameId = -1;
-  m_consecutiveFailures = 0;
   if (!discardSegment) {
     ++m_segment; // a discarded segment's number is used again
   }
 }
 
+void SlamSystem::dropPreparedReferenceAndSnapshot()
+{
+  {
+    std::lock_guard<std::mutex> lock(m_referenceMutex);
+    m_preparedReady = false;
+  }
+  std::lock_guard<std::mutex> lock(m_snapshotMutex);
+  m_snapshotPoints.clear();
+  m_snapshotImmature = 0;
+  m_snapshotMemoryMb = 0.;
+  m_snapshotKeyframesHeld = 0;
+}
+
 void SlamSystem::reset()
 {
   synchronize();
-  if (m_windowRelocalization) {
-    m_windowRelocalization->clear(); // keyframe ids start again: features kept by id would belong to other images
-  }
+  m_tracking->endSegment(); // keyframe ids start again: features kept by id would belong to other images
   {
     std::lock_guard<std::mutex> mapperLock(m_mapperMutex);
     m_mapper->reset(); // the global map too: a reset system starts from nothing (keyframe ids start again at 0)
@@ -504,17 +362,15 @@ void SlamSystem::reset()
   m_recorder.clear();
   m_runStats.clear();
   m_initializer->reset();
-  m_initFirstFrame.reset();
-  m_pendingFrames.clear();
-  m_trackerRefKeyframe = -1;
-  m_initialized = false;
+  m_frameTracker->reset();
+  if (m_localizer) {
+    m_localizer->reset(); // the loaded map went with the rest
+  }
+  m_localizationReady = false;
   m_segment = 0;
   m_segmentOrigin = SE3d();
-  m_lastFrameId = m_prelastFrameId = -1;
   m_nextFrameId = 0;
   m_lastTimestamp = 0.;
-  m_consecutiveFailures = 0;
-  m_framesSinceKeyframeRequest = 0;
   {
     std::lock_guard<std::mutex> lock(m_queueMutex);
     m_pendingKeyframeRef = -1;
@@ -529,16 +385,101 @@ void SlamSystem::reset()
   m_keyframeCount = 0;
   m_segmentsStarted = 0;
   m_restartRequested = false;
-  m_relocalizing = false;
-  m_storedMapFix = StoredMapFix();
-  m_continuedMotion.reset();
   m_relocAttempts = 0;
   m_relocSuccesses = 0;
-  m_localizationReady = false; // the loaded map went with the rest
-  m_localizedKeyframe = -1;
-  m_localMapKeyframe = -1;
   std::lock_guard<std::mutex> lock(m_imageMutex);
   m_lastImage.resize(0, 0);
 }
 
+MapCamera SlamSystem::mapCamera() const
+{
+  MapCamera c;
+  c.width = m_preprocessor.width();
+  c.height = m_preprocessor.height();
+  c.fx = m_preprocessor.intrinsics().fx;
+  c.fy = m_preprocessor.intrinsics().fy;
+  c.cx = m_preprocessor.intrinsics().cx;
+  c.cy = m_preprocessor.intrinsics().cy;
+  return c;
+}
+
+void SlamSystem::requireGlobalMap(const std::string &path, const char *operation) const
+{
+  if (m_params.system.mode == vpHSlamParameters::modeVoStrict && !m_params.system.localizationOnly) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           path + ": " + operation +
+                               " needs system.mode vo-reuse or slam (vo-strict discards the keyframes that leave the "
+                               "window, so there is no map to keep)");
+  }
+}
+
+void SlamSystem::checkLoadedMap(const std::string &path, const MapSnapshot &map) const
+{
+  const MapCamera mine = mapCamera();
+  if (map.camera.width != mine.width || map.camera.height != mine.height || !close(map.camera.fx, mine.fx) ||
+      !close(map.camera.fy, mine.fy) || !close(map.camera.cx, mine.cx) || !close(map.camera.cy, mine.cy)) {
+    throw vpHSlamException(vpHSlamException::invalidCalibration,
+                           path + ": the map was built with another camera (" + describe(map.camera) +
+                               ") than this system's rectified camera (" + describe(mine) + ")");
+  }
+  if (map.vocabularyId != 0 && m_vocabulary && map.vocabularyId != m_vocabulary->impl().fingerprint()) {
+    throw vpHSlamException(vpHSlamException::unsupported, path + ": the map was indexed with vocabulary " +
+                                                              hex(map.vocabularyId) + ", this system uses vocabulary " +
+                                                              hex(m_vocabulary->impl().fingerprint()) +
+                                                              " (HSLAM_VOCABULARY or the shipped default)");
+  }
+}
+
+void SlamSystem::saveMap(const std::string &path)
+{
+  requireGlobalMap(path, "saveMap");
+  finishBackgroundWork(); // the map as the background bundle adjustment leaves it
+  MapSnapshot map;
+  map.camera = mapCamera();
+  map.vocabularyId = m_vocabulary ? m_vocabulary->impl().fingerprint() : 0;
+  {
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    m_mapper->mapSnapshot(map.keyframes, map.edges);
+  }
+  if (map.keyframes.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, path + ": no map to save yet (no keyframe)");
+  }
+  saveMapFile(path, map);
+  VP_HSLAM_LOG(vpHSlamLog::info, "map saved to " << path << ": " << map.keyframes.size() << " keyframes, "
+                                                 << map.edges.size() << " pose-pose edges");
+}
+
+void SlamSystem::loadMap(const std::string &path)
+{
+  requireGlobalMap(path, "loadMap");
+  if (m_frames.load() > 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           path + ": loadMap comes before the first frame (or after reset())");
+  }
+  MapSnapshot map = loadMapFile(path);
+  checkLoadedMap(path, map);
+  int lastId = -1;
+  for (const GlobalKeyframe &kf : map.keyframes) {
+    lastId = std::max(lastId, kf.id);
+  }
+  const size_t keyframes = map.keyframes.size();
+  {
+    std::lock_guard<std::mutex> lock(m_mapperMutex);
+    m_mapper->restoreMap(std::move(map.keyframes), std::move(map.edges));
+    // Localisation-only searches the loaded keyframes; otherwise they stay out of the relocalisation index, which
+    // holds the current segment's keyframes only (their coordinates are not the loaded map's).
+    if (m_params.system.localizationOnly && !m_mapper->indexGlobalMap()) {
+      throw vpHSlamException(vpHSlamException::unsupported,
+                             path + ": system.localizationOnly needs a vocabulary (none found: set HSLAM_VOCABULARY)");
+    }
+  }
+  m_localizationReady = m_params.system.localizationOnly;
+  if (m_localizer) {
+    m_localizer->reset(); // what it gathered came from the previous map
+  }
+  // New keyframes are numbered after the loaded ones: ids stay unique in the global map and in a saved map.
+  m_keyframeCount = std::max(m_keyframeCount.load(), lastId + 1);
+  m_recorder.setFirstKeyframeId(m_keyframeCount.load());
+  VP_HSLAM_LOG(vpHSlamLog::info, "map loaded from " << path << ": " << keyframes << " keyframes");
+}
 } // namespace hslam
