@@ -116,16 +116,79 @@ bool parseTriple(const std::string &text, double xyz[3])
   in >> xyz[0] >> comma1 >> xyz[1] >> comma2 >> xyz[2];
   return in && comma1 == ',' && comma2 == ',' && (in >> std::ws).eof();
 }
-} // namespace
 
-int main(int argc, char **argv)
-{
+//! What the command line sets: the run's settings, the goal (metres, degrees) and the program's own options.
+struct Options {
   hslam_servo::ServoSettings settings;
   std::string plot = "servo-errors.png", config;
   unsigned int printEvery = 1;
-  double goalT[3] = {settings.c0Mcd[0][3], settings.c0Mcd[1][3], settings.c0Mcd[2][3]};
-  const vpThetaUVector defaultTu(settings.c0Mcd.getRotationMatrix());
-  double goalR[3] = {vpMath::deg(defaultTu[0]), vpMath::deg(defaultTu[1]), vpMath::deg(defaultTu[2])};
+  double goalT[3] = {0., 0., 0.};
+  double goalR[3] = {0., 0., 0.};
+};
+
+//! One "--option value" pair into \e options; false with a message on stderr when unknown or a bad value.
+bool parseOption(const std::string &arg, const std::string &value, Options &options)
+{
+  hslam_servo::ServoSettings &settings = options.settings;
+  bool ok = true;
+  if (arg == "--plot") {
+    options.plot = value;
+  } else if (arg == "--config") {
+    options.config = value;
+  } else if (arg == "--goal-translation") {
+    ok = parseTriple(value, options.goalT);
+  } else if (arg == "--goal-rotation") {
+    ok = parseTriple(value, options.goalR);
+  } else if (arg == "--width") {
+    ok = parseUnsigned(value, settings.width);
+  } else if (arg == "--height") {
+    ok = parseUnsigned(value, settings.height);
+  } else if (arg == "--seed") {
+    ok = parseUnsigned(value, settings.sceneSeed);
+  } else if (arg == "--noise") {
+    ok = parseDouble(value, settings.noiseSigma);
+  } else if (arg == "--init-frames") {
+    ok = parseUnsigned(value, settings.initFrames);
+  } else if (arg == "--init-radius") {
+    ok = parseDouble(value, settings.initRadiusMetres);
+  } else if (arg == "--gain-zero") {
+    ok = parseDouble(value, settings.gainAtZero);
+  } else if (arg == "--gain-infinity") {
+    ok = parseDouble(value, settings.gainAtInfinity);
+  } else if (arg == "--gain-slope") {
+    ok = parseDouble(value, settings.gainSlopeAtZero);
+  } else if (arg == "--max-step-m") {
+    ok = parseDouble(value, settings.maxStepMetres);
+  } else if (arg == "--max-step-deg") {
+    ok = parseDouble(value, settings.maxStepDegrees);
+  } else if (arg == "--max-iterations") {
+    ok = parseUnsigned(value, settings.maxIterations);
+  } else if (arg == "--converged-m") {
+    ok = parseDouble(value, settings.convergedMetres);
+  } else if (arg == "--converged-deg") {
+    ok = parseDouble(value, settings.convergedDegrees);
+  } else if (arg == "--print-every") {
+    ok = parseUnsigned(value, options.printEvery) && options.printEvery > 0;
+  } else {
+    std::cerr << "Unknown option '" << arg << "' (see --help)\n";
+    return false;
+  }
+  if (!ok) {
+    std::cerr << "Bad value for " << arg << ": '" << value << "'\n";
+  }
+  return ok;
+}
+
+//! The command line into \e options (goal defaults from the settings' c0Mcd); an exit code when the program must
+//! stop (--help, or an error), -1 to run.
+int parseCommandLine(int argc, char **argv, Options &options)
+{
+  const vpHomogeneousMatrix &c0Mcd = options.settings.c0Mcd;
+  const vpThetaUVector defaultTu(c0Mcd.getRotationMatrix());
+  for (int i = 0; i < 3; ++i) {
+    options.goalT[i] = c0Mcd[static_cast<unsigned int>(i)][3];
+    options.goalR[i] = vpMath::deg(defaultTu[static_cast<unsigned int>(i)]);
+  }
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     if (arg == "--help" || arg == "-h") {
@@ -136,59 +199,73 @@ int main(int argc, char **argv)
       std::cerr << "Unknown or incomplete option '" << arg << "' (see --help)\n";
       return EXIT_FAILURE;
     }
-    const std::string value = argv[++k];
-    bool ok = true;
-    if (arg == "--plot") {
-      plot = value;
-    } else if (arg == "--config") {
-      config = value;
-    } else if (arg == "--goal-translation") {
-      ok = parseTriple(value, goalT);
-    } else if (arg == "--goal-rotation") {
-      ok = parseTriple(value, goalR);
-    } else if (arg == "--width") {
-      ok = parseUnsigned(value, settings.width);
-    } else if (arg == "--height") {
-      ok = parseUnsigned(value, settings.height);
-    } else if (arg == "--seed") {
-      ok = parseUnsigned(value, settings.sceneSeed);
-    } else if (arg == "--noise") {
-      ok = parseDouble(value, settings.noiseSigma);
-    } else if (arg == "--init-frames") {
-      ok = parseUnsigned(value, settings.initFrames);
-    } else if (arg == "--init-radius") {
-      ok = parseDouble(value, settings.initRadiusMetres);
-    } else if (arg == "--gain-zero") {
-      ok = parseDouble(value, settings.gainAtZero);
-    } else if (arg == "--gain-infinity") {
-      ok = parseDouble(value, settings.gainAtInfinity);
-    } else if (arg == "--gain-slope") {
-      ok = parseDouble(value, settings.gainSlopeAtZero);
-    } else if (arg == "--max-step-m") {
-      ok = parseDouble(value, settings.maxStepMetres);
-    } else if (arg == "--max-step-deg") {
-      ok = parseDouble(value, settings.maxStepDegrees);
-    } else if (arg == "--max-iterations") {
-      ok = parseUnsigned(value, settings.maxIterations);
-    } else if (arg == "--converged-m") {
-      ok = parseDouble(value, settings.convergedMetres);
-    } else if (arg == "--converged-deg") {
-      ok = parseDouble(value, settings.convergedDegrees);
-    } else if (arg == "--print-every") {
-      ok = parseUnsigned(value, printEvery) && printEvery > 0;
-    } else {
-      std::cerr << "Unknown option '" << arg << "' (see --help)\n";
-      return EXIT_FAILURE;
-    }
-    if (!ok) {
-      std::cerr << "Bad value for " << arg << ": '" << value << "'\n";
+    if (!parseOption(arg, argv[++k], options)) {
       return EXIT_FAILURE;
     }
   }
+  return -1;
+}
 
+//! One line per printed sample: errors, SLAM error and speed while servoing, the SLAM state otherwise.
+void printSample(const hslam_servo::ServoSample &s)
+{
+  char line[256];
+  if (s.servoing && s.hasEstimate) {
+    std::snprintf(line, sizeof(line),
+                  "servo %4u t=%6.2f s  error %.5f m %7.3f deg | slam %.5f m %6.3f deg | v %.3f m/s "
+                  "%5.2f deg/s",
+                  s.frame, s.time, s.servoErrorMetres, s.servoErrorDegrees, s.slamErrorMetres, s.slamErrorDegrees,
+                  s.speedMetresPerSecond, s.speedDegreesPerSecond);
+  } else {
+    std::snprintf(line, sizeof(line), "%s %4u t=%6.2f s  error %.5f m %7.3f deg | slam %s",
+                  s.servoing ? "servo" : "init ", s.frame, s.time, s.servoErrorMetres, s.servoErrorDegrees,
+                  vpHSlam::stateName(s.state).c_str());
+  }
+  std::cout << line << "\n";
+}
+
+//! The errors over time as a picture (drawServoErrors) at \e plot.
+void writePlot(const std::string &plot, const hslam_servo::ServoResult &result)
+{
+  vpImage<vpRGBa> I;
+  char caption[160];
+  std::snprintf(caption, sizeof(caption), "PBVS with H-SLAM in the loop: %s after %u iterations",
+                result.converged ? "converged" : "NOT converged", result.iterations);
+  hslam_servo::drawServoErrors(I, result.samples, caption);
+  vpImageIo::write(I, plot);
+  std::cout << "Plot written to " << plot << "\n";
+}
+
+//! The run's outcome as key=value lines (read by the tests and scripts).
+void printSummary(const hslam_servo::ServoResult &result, double seconds)
+{
+  const hslam_servo::ServoSample &last = result.samples.back();
+  std::cout << "converged=" << (result.converged ? 1 : 0) << "\n";
+  if (!result.failure.empty()) {
+    std::cout << "failure=" << result.failure << "\n";
+  }
+  std::cout << "iterations=" << result.iterations << "\nframes=" << result.frames
+            << "\nsim3_scale=" << result.alignmentScale << "\nsim3_rmse_m=" << result.alignmentRmseMetres
+            << "\nsim3_poses=" << result.alignmentPoses << "\nfinal_translation_error_m=" << last.servoErrorMetres
+            << "\nfinal_rotation_error_deg=" << last.servoErrorDegrees
+            << "\nfinal_slam_translation_error_m=" << last.slamErrorMetres
+            << "\nfinal_slam_rotation_error_deg=" << last.slamErrorDegrees << "\nslam_s=" << result.slamSeconds
+            << "\nrender_s=" << result.renderSeconds << "\nrun_time_s=" << seconds << std::endl;
+}
+} // namespace
+
+int main(int argc, char **argv)
+{
+  Options options;
+  const int exitCode = parseCommandLine(argc, argv, options);
+  if (exitCode >= 0) {
+    return exitCode;
+  }
+  hslam_servo::ServoSettings &settings = options.settings;
+  const double *goalT = options.goalT, *goalR = options.goalR;
   try {
-    if (!config.empty()) {
-      settings.slam.load(config);
+    if (!options.config.empty()) {
+      settings.slam.load(options.config);
     }
     settings.slam.system.deterministic = true; // the closed loop runs in simulated time
     settings.c0Mcd = vpHomogeneousMatrix(goalT[0], goalT[1], goalT[2], vpMath::rad(goalR[0]), vpMath::rad(goalR[1]),
@@ -200,48 +277,17 @@ int main(int argc, char **argv)
               << settings.initRadiusMetres << " m\n";
 
     const double start = vpTime::measureTimeMs();
+    const unsigned int printEvery = options.printEvery;
     const hslam_servo::ServoResult result = hslam_servo::runServo(settings, [&](const hslam_servo::ServoSample &s) {
-      if (s.frame % printEvery != 0) {
-        return;
+      if (s.frame % printEvery == 0) {
+        printSample(s);
       }
-      char line[256];
-      if (s.servoing && s.hasEstimate) {
-        std::snprintf(line, sizeof(line),
-                      "servo %4u t=%6.2f s  error %.5f m %7.3f deg | slam %.5f m %6.3f deg | v %.3f m/s "
-                      "%5.2f deg/s",
-                      s.frame, s.time, s.servoErrorMetres, s.servoErrorDegrees, s.slamErrorMetres, s.slamErrorDegrees,
-                      s.speedMetresPerSecond, s.speedDegreesPerSecond);
-      } else {
-        std::snprintf(line, sizeof(line), "%s %4u t=%6.2f s  error %.5f m %7.3f deg | slam %s",
-                      s.servoing ? "servo" : "init ", s.frame, s.time, s.servoErrorMetres, s.servoErrorDegrees,
-                      vpHSlam::stateName(s.state).c_str());
-      }
-      std::cout << line << "\n";
     });
     const double seconds = 1e-3 * (vpTime::measureTimeMs() - start);
-
-    if (!plot.empty() && result.samples.size() >= 2) {
-      vpImage<vpRGBa> I;
-      char caption[160];
-      std::snprintf(caption, sizeof(caption), "PBVS with H-SLAM in the loop: %s after %u iterations",
-                    result.converged ? "converged" : "NOT converged", result.iterations);
-      hslam_servo::drawServoErrors(I, result.samples, caption);
-      vpImageIo::write(I, plot);
-      std::cout << "Plot written to " << plot << "\n";
+    if (!options.plot.empty() && result.samples.size() >= 2) {
+      writePlot(options.plot, result);
     }
-
-    const hslam_servo::ServoSample &last = result.samples.back();
-    std::cout << "converged=" << (result.converged ? 1 : 0) << "\n";
-    if (!result.failure.empty()) {
-      std::cout << "failure=" << result.failure << "\n";
-    }
-    std::cout << "iterations=" << result.iterations << "\nframes=" << result.frames
-              << "\nsim3_scale=" << result.alignmentScale << "\nsim3_rmse_m=" << result.alignmentRmseMetres
-              << "\nsim3_poses=" << result.alignmentPoses << "\nfinal_translation_error_m=" << last.servoErrorMetres
-              << "\nfinal_rotation_error_deg=" << last.servoErrorDegrees
-              << "\nfinal_slam_translation_error_m=" << last.slamErrorMetres
-              << "\nfinal_slam_rotation_error_deg=" << last.slamErrorDegrees << "\nslam_s=" << result.slamSeconds
-              << "\nrender_s=" << result.renderSeconds << "\nrun_time_s=" << seconds << std::endl;
+    printSummary(result, seconds);
     return result.converged ? EXIT_SUCCESS : EXIT_FAILURE;
   } catch (const vpException &e) {
     std::cerr << "Error: " << e.getStringMessage() << std::endl;

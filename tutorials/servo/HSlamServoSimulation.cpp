@@ -112,39 +112,51 @@ void checkSettings(const ServoSettings &s)
 }
 } // namespace
 
-ServoResult runServo(const ServoSettings &settings, const std::function<void(const ServoSample &)> &onSample)
+namespace
 {
-  checkSettings(settings);
-  ServoResult result;
-
-  vpHSlamSyntheticScene scene;
+//! The synthetic scene of the run: its size, frame rate, seed and image noise.
+void configureScene(vpHSlamSyntheticScene &scene, const ServoSettings &settings)
+{
   if (!settings.imagesDataPath.empty()) {
     scene.setImagesDataPath(settings.imagesDataPath);
   }
   vpHSlamSyntheticScene::Effects effects;
   effects.noiseSigma = settings.noiseSigma;
   scene.configure(settings.width, settings.height, kSceneFrames, settings.fps, settings.sceneSeed, effects);
+}
 
-  const double dt = 1. / settings.fps;
-  const vpHomogeneousMatrix wMc0 = scene.getPose(0);
-  const vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
-  const vpHomogeneousMatrix cdMw = wMcd.inverse();
-
-  // The free-flying camera. Its own velocity saturation (per component, with a message on stdout) is set above
-  // every velocity sent: the initialisation path's peak and boundTwist() (on the norms) bound them here.
-  const double maxSpeed = settings.maxStepMetres / dt, maxRate = vpMath::rad(settings.maxStepDegrees) / dt;
-  vpSimulatorCamera robot;
+//! The free-flying camera at \e wMc0. Its own velocity saturation (per component, with a message on stdout) is set
+//! above every velocity sent: the initialisation path's peak and boundTwist() (on the norms) bound them here.
+void configureRobot(vpSimulatorCamera &robot, double dt, double maxSpeed, double maxRate,
+                    const vpHomogeneousMatrix &wMc0)
+{
   robot.setSamplingTime(dt);
   robot.setMaxTranslationVelocity(2. * std::max(maxSpeed, kMaxInitStepMetres / dt));
   robot.setMaxRotationVelocity(2. * maxRate);
   robot.setPosition(wMc0);
+}
 
-  // PBVS, eye-in-hand: s = (cd_t_c, theta u of cdRc), s* = 0. With the current interaction matrix
-  // L = [cdRc 0; 0 L_thetau], v = -lambda L^+ e decouples translation and rotation: the camera centre goes to the
-  // goal along a straight line and each error decays as exp(-lambda t).
-  vpFeatureTranslation t(vpFeatureTranslation::cdMc), td(vpFeatureTranslation::cdMc);
-  vpFeatureThetaU tu(vpFeatureThetaU::cdRc), tud(vpFeatureThetaU::cdRc);
-  vpServo task;
+//! Frame \e k rendered at the true pose \e wMc and tracked by SLAM (state into \e sample), both timed.
+void renderAndTrack(vpHSlamSyntheticScene &scene, vpHSlam &slam, const vpHomogeneousMatrix &wMc, unsigned int k,
+                    vpImage<unsigned char> &I, ServoSample &sample, ServoResult &result)
+{
+  double t0 = vpTime::measureTimeMs();
+  scene.renderAtPose(wMc, I, k);
+  result.renderSeconds += 1e-3 * (vpTime::measureTimeMs() - t0);
+  t0 = vpTime::measureTimeMs();
+  sample.state = slam.track(I, sample.time);
+  result.slamSeconds += 1e-3 * (vpTime::measureTimeMs() - t0);
+  ++result.frames;
+}
+
+/*!
+  PBVS, eye-in-hand: s = (cd_t_c, theta u of cdRc), s* = 0. With the current interaction matrix
+  L = [cdRc 0; 0 L_thetau], v = -lambda L^+ e decouples translation and rotation: the camera centre goes to the
+  goal along a straight line and each error decays as exp(-lambda t). The task keeps pointers to the features.
+*/
+void configureTask(vpServo &task, vpFeatureTranslation &t, vpFeatureTranslation &td, vpFeatureThetaU &tu,
+                   vpFeatureThetaU &tud, const ServoSettings &settings)
+{
   task.setServo(vpServo::EYEINHAND_CAMERA);
   task.setInteractionMatrixType(vpServo::CURRENT);
   task.setLambda(vpAdaptiveGain(settings.gainAtZero, settings.gainAtInfinity, settings.gainSlopeAtZero));
@@ -152,12 +164,113 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
   tu.buildFrom(vpHomogeneousMatrix());
   task.addFeature(t, td);
   task.addFeature(tu, tud);
+}
+
+/*!
+  Monocular scale and world frame, fixed once at the end of the initialisation path: the Sim(3) that best maps the
+  SLAM poses of the path (and of this frame) onto the simulator's known ones (\e truth); the path's samples get their
+  SLAM errors. False, with result.failure, when SLAM did not initialise on the path.
+*/
+bool alignSlamToSimulator(const vpHSlam &slam, const vpHSlamTrajectory &truth, const ServoSample &sample,
+                          const ServoSettings &settings, ServoResult &result, Sim3 &sim3)
+{
+  const vpHSlamTrajectory estimate = slam.getTrajectory();
+  const unsigned int minPoses = static_cast<unsigned int>(std::ceil(kMinAlignedShare * (settings.initFrames + 1)));
+  if (sample.state != vpHSlam::stateTracking || estimate.size() < minPoses) {
+    result.failure = "SLAM did not initialise on the initialisation path (" + std::to_string(estimate.size()) + " of " +
+                     std::to_string(settings.initFrames + 1) + " frames with a pose, state " +
+                     vpHSlam::stateName(sample.state) + ")";
+    return false;
+  }
+  std::vector<vpHomogeneousMatrix> eMc, gMc;
+  std::vector<size_t> frames;
+  for (size_t i = 0; i < estimate.size(); ++i) {
+    const double frame = std::round(estimate.getTimestamp(i) * settings.fps);
+    if (frame >= 0. && frame < truth.size()) {
+      frames.push_back(static_cast<size_t>(frame));
+      eMc.push_back(estimate.get_wMc(i));
+      gMc.push_back(truth.get_wMc(frames.back()));
+    }
+  }
+  sim3 = alignSim3(eMc, gMc);
+  result.initialised = true;
+  result.alignmentScale = sim3.scale;
+  result.alignmentRmseMetres = sim3.rmseMetres;
+  result.alignmentPoses = static_cast<unsigned int>(eMc.size());
+  // The initialisation frames' SLAM errors, now that they can be expressed in the simulator's frame.
+  for (size_t i = 0; i < frames.size() && frames[i] < result.samples.size(); ++i) {
+    ServoSample &past = result.samples[frames[i]];
+    const PoseError e = poseError(toWorld(sim3, eMc[i]).inverse() * gMc[i]);
+    past.hasEstimate = true;
+    past.slamErrorMetres = e.metres;
+    past.slamErrorDegrees = e.degrees;
+  }
+  return true;
+}
+
+//! The servo velocity from the SLAM pose (mapped into the simulator's world by \e sim3), bounded; the sample's SLAM
+//! and measured errors (against the true pose \e wMc and the goal \e cdMw).
+vpColVector servoVelocity(const vpHSlam &slam, const Sim3 &sim3, const vpHomogeneousMatrix &cdMw,
+                          const vpHomogeneousMatrix &wMc, vpServo &task, vpFeatureTranslation &t, vpFeatureThetaU &tu,
+                          double maxSpeed, double maxRate, ServoSample &sample)
+{
+  const vpHomogeneousMatrix wMcSlam = toWorld(sim3, slam.get_cMw().inverse());
+  const vpHomogeneousMatrix cdMcSlam = cdMw * wMcSlam;
+  const PoseError slamError = poseError(wMcSlam.inverse() * wMc);
+  const PoseError measured = poseError(cdMcSlam);
+  sample.hasEstimate = true;
+  sample.slamErrorMetres = slamError.metres;
+  sample.slamErrorDegrees = slamError.degrees;
+  sample.measuredErrorMetres = measured.metres;
+  sample.measuredErrorDegrees = measured.degrees;
+  t.buildFrom(cdMcSlam);
+  tu.buildFrom(cdMcSlam);
+  return boundTwist(task.computeControlLaw(), maxSpeed, maxRate);
+}
+
+//! True when the measured error has stayed within the convergence bounds for convergedFrames servo frames in a row
+//! (\e streak counts them).
+bool convergedStreak(const ServoSample &sample, const ServoSettings &settings, unsigned int &streak)
+{
+  if (sample.servoing && sample.hasEstimate && sample.measuredErrorMetres < settings.convergedMetres &&
+      sample.measuredErrorDegrees < settings.convergedDegrees) {
+    return ++streak >= settings.convergedFrames;
+  }
+  streak = 0;
+  return false;
+}
+} // namespace
+
+ServoResult runServo(const ServoSettings &settings, const std::function<void(const ServoSample &)> &onSample)
+{
+  checkSettings(settings);
+  ServoResult result;
+  vpHSlamSyntheticScene scene;
+  configureScene(scene, settings);
+
+  const double dt = 1. / settings.fps;
+  const vpHomogeneousMatrix wMc0 = scene.getPose(0);
+  const vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
+  const vpHomogeneousMatrix cdMw = wMcd.inverse();
+
+  const double maxSpeed = settings.maxStepMetres / dt, maxRate = vpMath::rad(settings.maxStepDegrees) / dt;
+  vpSimulatorCamera robot;
+  configureRobot(robot, dt, maxSpeed, maxRate, wMc0);
+
+  vpFeatureTranslation t(vpFeatureTranslation::cdMc), td(vpFeatureTranslation::cdMc);
+  vpFeatureThetaU tu(vpFeatureThetaU::cdRc), tud(vpFeatureThetaU::cdRc);
+  vpServo task;
+  configureTask(task, t, td, tu, tud, settings);
 
   vpHSlam slam(pinholeCamera(scene), settings.slam);
   vpHSlamTrajectory truth; // simulator poses of the frames seen so far (for the alignment)
   Sim3 sim3;               // SLAM world e to simulator world g, once aligned
   unsigned int untracked = 0, streak = 0;
   vpImage<unsigned char> I;
+  const auto record = [&result, &onSample](const ServoSample &sample) {
+    result.samples.push_back(sample);
+    onSample(sample);
+  };
 
   const unsigned int lastFrame = settings.initFrames + settings.maxIterations;
   for (unsigned int k = 0; k <= lastFrame; ++k) {
@@ -167,55 +280,14 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
     sample.servoing = k >= settings.initFrames;
 
     const vpHomogeneousMatrix wMc = robot.getPosition();
-    double t0 = vpTime::measureTimeMs();
-    scene.renderAtPose(wMc, I, k);
-    result.renderSeconds += 1e-3 * (vpTime::measureTimeMs() - t0);
-    t0 = vpTime::measureTimeMs();
-    sample.state = slam.track(I, sample.time);
-    result.slamSeconds += 1e-3 * (vpTime::measureTimeMs() - t0);
+    renderAndTrack(scene, slam, wMc, k, I, sample, result);
     truth.add(sample.time, wMc);
-    ++result.frames;
-
     const PoseError servoError = poseError(cdMw * wMc);
     sample.servoErrorMetres = servoError.metres;
     sample.servoErrorDegrees = servoError.degrees;
-
-    if (k == settings.initFrames) {
-      // Monocular scale and world frame, fixed once: the Sim(3) that best maps the SLAM poses of the
-      // initialisation path (and of this frame) onto the simulator's known ones.
-      const vpHSlamTrajectory estimate = slam.getTrajectory();
-      const unsigned int minPoses = static_cast<unsigned int>(std::ceil(kMinAlignedShare * (settings.initFrames + 1)));
-      if (sample.state != vpHSlam::stateTracking || estimate.size() < minPoses) {
-        result.failure = "SLAM did not initialise on the initialisation path (" + std::to_string(estimate.size()) +
-                         " of " + std::to_string(settings.initFrames + 1) + " frames with a pose, state " +
-                         vpHSlam::stateName(sample.state) + ")";
-        result.samples.push_back(sample);
-        onSample(sample);
-        return result;
-      }
-      std::vector<vpHomogeneousMatrix> eMc, gMc;
-      std::vector<size_t> frames;
-      for (size_t i = 0; i < estimate.size(); ++i) {
-        const double frame = std::round(estimate.getTimestamp(i) * settings.fps);
-        if (frame >= 0. && frame < truth.size()) {
-          frames.push_back(static_cast<size_t>(frame));
-          eMc.push_back(estimate.get_wMc(i));
-          gMc.push_back(truth.get_wMc(frames.back()));
-        }
-      }
-      sim3 = alignSim3(eMc, gMc);
-      result.initialised = true;
-      result.alignmentScale = sim3.scale;
-      result.alignmentRmseMetres = sim3.rmseMetres;
-      result.alignmentPoses = static_cast<unsigned int>(eMc.size());
-      // The initialisation frames' SLAM errors, now that they can be expressed in the simulator's frame.
-      for (size_t i = 0; i < frames.size() && frames[i] < result.samples.size(); ++i) {
-        ServoSample &past = result.samples[frames[i]];
-        const PoseError e = poseError(toWorld(sim3, eMc[i]).inverse() * gMc[i]);
-        past.hasEstimate = true;
-        past.slamErrorMetres = e.metres;
-        past.slamErrorDegrees = e.degrees;
-      }
+    if (k == settings.initFrames && !alignSlamToSimulator(slam, truth, sample, settings, result, sim3)) {
+      record(sample);
+      return result;
     }
 
     vpColVector v(6, 0.);
@@ -223,42 +295,24 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
       v = initialisationVelocity(k, settings.initFrames, settings.initRadiusMetres, dt);
     } else if (sample.state == vpHSlam::stateTracking) {
       untracked = 0;
-      const vpHomogeneousMatrix wMcSlam = toWorld(sim3, slam.get_cMw().inverse());
-      const vpHomogeneousMatrix cdMcSlam = cdMw * wMcSlam;
-      const PoseError slamError = poseError(wMcSlam.inverse() * wMc);
-      const PoseError measured = poseError(cdMcSlam);
-      sample.hasEstimate = true;
-      sample.slamErrorMetres = slamError.metres;
-      sample.slamErrorDegrees = slamError.degrees;
-      sample.measuredErrorMetres = measured.metres;
-      sample.measuredErrorDegrees = measured.degrees;
-      t.buildFrom(cdMcSlam);
-      tu.buildFrom(cdMcSlam);
-      v = boundTwist(task.computeControlLaw(), maxSpeed, maxRate);
+      v = servoVelocity(slam, sim3, cdMw, wMc, task, t, tu, maxSpeed, maxRate, sample);
       ++result.iterations;
     } else if (++untracked > settings.maxUntrackedFrames) {
       // Without a pose the camera is held still (v = 0) for a few frames, then the run gives up.
       result.failure = "SLAM lost the camera while servoing (" + std::to_string(untracked) +
                        " frames in a row without a pose, state " + vpHSlam::stateName(sample.state) + ")";
-      result.samples.push_back(sample);
-      onSample(sample);
+      record(sample);
       return result;
     }
     sample.speedMetresPerSecond = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
     sample.speedDegreesPerSecond = vpMath::deg(std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5]));
     robot.setVelocity(vpRobot::CAMERA_FRAME, v);
-    result.samples.push_back(sample);
-    onSample(sample);
+    record(sample);
 
-    if (sample.servoing && sample.hasEstimate && sample.measuredErrorMetres < settings.convergedMetres &&
-        sample.measuredErrorDegrees < settings.convergedDegrees) {
-      if (++streak >= settings.convergedFrames) {
-        result.converged = true;
-        result.iterations -= settings.convergedFrames - 1; // to the first frame of the streak
-        return result;
-      }
-    } else {
-      streak = 0;
+    if (convergedStreak(sample, settings, streak)) {
+      result.converged = true;
+      result.iterations -= settings.convergedFrames - 1; // to the first frame of the streak
+      return result;
     }
   }
   result.failure = "not converged after " + std::to_string(settings.maxIterations) + " servo iterations";

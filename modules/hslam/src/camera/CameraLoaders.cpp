@@ -143,7 +143,11 @@ void setDefaultRectification(vpHSlamCamera &cam, const std::string &where)
 
 // ----------------------------------------------------------------------------------------------------------------
 
-vpHSlamCamera vpHSlamCamera::loadDso(const std::string &path)
+namespace
+{
+// The lines of a DSO camera.txt, trailing empty lines dropped; an empty file or an empty line among the first four is
+// an error.
+std::vector<hslam::TextLine> readDsoLines(const std::string &path)
 {
   std::vector<hslam::TextLine> lines = hslam::readTextLines(path);
   while (!lines.empty() && hslam::trim(lines.back().text).empty()) {
@@ -158,106 +162,64 @@ vpHSlamCamera vpHSlamCamera::loadDso(const std::string &path)
       throw vpHSlamException(vpHSlamException::parseError, fileLine(path, line.number) + ": unexpected empty line");
     }
   }
+  return lines;
+}
 
-  // Line 1: model and parameters.
-  const hslam::TextLine &modelLine = lines[kDsoModelLine - 1];
-  std::vector<std::string> tokens = hslam::splitWhitespace(modelLine.text);
-  Model model = pinhole;
-  std::vector<double> values; // fx fy cx cy, then the model parameters
-  double unused = 0.0;
-  if (hslam::tryParseDouble(tokens[0], unused)) {
-    // DSO's keyword-less legacy forms.
-    if (tokens.size() != kLegacyAtanTokens && tokens.size() != kLegacyRadTanTokens) {
-      throw vpHSlamException(vpHSlamException::parseError,
-                             fileLine(path, modelLine.number) +
-                                 ": expected 5 (fx fy cx cy omega) or 8 (fx fy cx cy k1 k2 p1 p2) values, found " +
-                                 std::to_string(tokens.size()));
-    }
-    values = hslam::parseDoubles(tokens, 0, path, modelLine.number, "camera parameters");
-    if (tokens.size() == kLegacyRadTanTokens) {
-      model = radialTangential;
-    } else if (values[kIntrinsicCount] == 0.0) {
-      model = pinhole; // DSO: omega 0 means no distortion
-      values.pop_back();
-    } else {
-      model = fov;
-    }
-  } else {
-    const DsoModelKeyword *keyword = nullptr;
-    for (const DsoModelKeyword &k : kDsoModels) {
-      if (tokens[0] == k.keyword) {
-        keyword = &k;
-      }
-    }
-    if (!keyword) {
-      throw vpHSlamException(vpHSlamException::unsupported,
-                             fileLine(path, modelLine.number) + ": unknown camera model '" + tokens[0] +
-                                 "' (DSO camera.txt knows Pinhole, RadTan, EquiDistant, KannalaBrandt, FOV)");
-    }
-    hslam::expectTokenCount(tokens, 1 + kIntrinsicCount + keyword->parameterCount, path, modelLine.number,
-                            std::string(keyword->keyword) + " model line (keyword included)");
-    values = hslam::parseDoubles(tokens, 1, path, modelLine.number, std::string(keyword->keyword) + " parameter");
-    model = keyword->model;
-    if (model == pinhole) {
-      if (values.back() != 0.0) {
-        throw vpHSlamException(vpHSlamException::invalidCalibration,
-                               fileLine(path, modelLine.number) +
-                                   ": the fifth value of a Pinhole line must be 0 (use FOV for an ATAN camera)");
-      }
-      values.pop_back();
-    }
-  }
-
-  // Line 2: input size.
-  if (lines.size() < kDsoInputSizeLine) {
+// DSO's keyword-less legacy model line: 5 values (fx fy cx cy omega; omega 0 = pinhole) or 8 (RadTan).
+void parseLegacyModelLine(const std::vector<std::string> &tokens, const hslam::TextLine &modelLine,
+                          const std::string &path, vpHSlamCamera::Model &model, std::vector<double> &values)
+{
+  if (tokens.size() != kLegacyAtanTokens && tokens.size() != kLegacyRadTanTokens) {
     throw vpHSlamException(vpHSlamException::parseError,
-                           fileLine(path, kDsoInputSizeLine) + ": missing input image size line 'width height'");
+                           fileLine(path, modelLine.number) +
+                               ": expected 5 (fx fy cx cy omega) or 8 (fx fy cx cy k1 k2 p1 p2) values, found " +
+                               std::to_string(tokens.size()));
   }
-  unsigned int width = 0, height = 0;
-  parseSizeLine(lines[kDsoInputSizeLine - 1], path, "input image size", width, height);
-
-  double fx = values[0], fy = values[1], cx = values[2], cy = values[3];
-  if (isRelative(cx, cy)) {
-    relativeToPixels(width, height, fx, fy, cx, cy);
+  values = hslam::parseDoubles(tokens, 0, path, modelLine.number, "camera parameters");
+  if (tokens.size() == kLegacyRadTanTokens) {
+    model = vpHSlamCamera::radialTangential;
+  } else if (values[kIntrinsicCount] == 0.0) {
+    model = vpHSlamCamera::pinhole; // DSO: omega 0 means no distortion
+    values.pop_back();
+  } else {
+    model = vpHSlamCamera::fov;
   }
-  const std::vector<double> distortion(values.begin() + kIntrinsicCount, values.end());
-  vpHSlamCamera cam = makeCamera(fileLine(path, modelLine.number), model, width, height, fx, fy, cx, cy, distortion);
+}
 
-  if (lines.size() < kDsoRectificationLine) {
-    setDefaultRectification(cam, path);
-    return cam;
-  }
-
-  // Line 4 (optional): output size, default the input size.
-  unsigned int outWidth = width, outHeight = height;
-  if (lines.size() >= kDsoOutputSizeLine) {
-    parseSizeLine(lines[kDsoOutputSizeLine - 1], path, "output image size", outWidth, outHeight);
-  }
-
-  // Line 3: rectification target.
-  const hslam::TextLine &rectLine = lines[kDsoRectificationLine - 1];
-  const std::string where = fileLine(path, rectLine.number);
-  tokens = hslam::splitWhitespace(rectLine.text);
-  if (tokens.size() == 1) {
-    if (tokens[0] == "crop") {
-      applyRectification(cam, where, rectifyCrop, outWidth, outHeight);
-    } else if (tokens[0] == "full") {
-      applyRectification(cam, where, rectifyFull, outWidth, outHeight);
-    } else if (tokens[0] == "none") {
-      if (outWidth != width || outHeight != height) {
-        // DSO: rectification "none" requires the output size to equal the input size.
-        throw vpHSlamException(vpHSlamException::invalidCalibration,
-                               fileLine(path, kDsoOutputSizeLine) + ": rectification 'none' needs the output size " +
-                                   std::to_string(outWidth) + "x" + std::to_string(outHeight) +
-                                   " to equal the input size " + std::to_string(width) + "x" + std::to_string(height));
-      }
-      applyRectification(cam, where, rectifyNone, outWidth, outHeight);
-    } else {
-      throw vpHSlamException(vpHSlamException::parseError,
-                             where + ": rectification '" + tokens[0] + "' is not crop, full, none or 'fx fy cx cy 0'");
+// A model line that starts with one of DSO's keywords (kDsoModels), then fx fy cx cy and the model's parameters.
+void parseKeywordModelLine(const std::vector<std::string> &tokens, const hslam::TextLine &modelLine,
+                           const std::string &path, vpHSlamCamera::Model &model, std::vector<double> &values)
+{
+  const DsoModelKeyword *keyword = nullptr;
+  for (const DsoModelKeyword &k : kDsoModels) {
+    if (tokens[0] == k.keyword) {
+      keyword = &k;
     }
-    return cam;
   }
+  if (!keyword) {
+    throw vpHSlamException(vpHSlamException::unsupported,
+                           fileLine(path, modelLine.number) + ": unknown camera model '" + tokens[0] +
+                               "' (DSO camera.txt knows Pinhole, RadTan, EquiDistant, KannalaBrandt, FOV)");
+  }
+  hslam::expectTokenCount(tokens, 1 + kIntrinsicCount + keyword->parameterCount, path, modelLine.number,
+                          std::string(keyword->keyword) + " model line (keyword included)");
+  values = hslam::parseDoubles(tokens, 1, path, modelLine.number, std::string(keyword->keyword) + " parameter");
+  model = keyword->model;
+  if (model == vpHSlamCamera::pinhole) {
+    if (values.back() != 0.0) {
+      throw vpHSlamException(vpHSlamException::invalidCalibration,
+                             fileLine(path, modelLine.number) +
+                                 ": the fifth value of a Pinhole line must be 0 (use FOV for an ATAN camera)");
+    }
+    values.pop_back();
+  }
+}
+
+// An explicit rectification line 'fx fy cx cy 0': the rectified intrinsics, relative ones scaled by the output size.
+vpCameraParameters parseExplicitRectification(const std::vector<std::string> &tokens, const hslam::TextLine &rectLine,
+                                              const std::string &path, unsigned int outWidth, unsigned int outHeight)
+{
+  const std::string where = fileLine(path, rectLine.number);
   hslam::expectTokenCount(tokens, kExplicitRectTokens, path, rectLine.number, "rectification 'fx fy cx cy 0'");
   const std::vector<double> rect = hslam::parseDoubles(tokens, 0, path, rectLine.number, "rectification");
   if (rect[kIntrinsicCount] != 0.0) {
@@ -279,7 +241,80 @@ vpHSlamCamera vpHSlamCamera::loadDso(const std::string &path)
     throw vpHSlamException(vpHSlamException::invalidCalibration,
                            where + ": rectified intrinsics refused by ViSP (" + e.getStringMessage() + ")");
   }
-  applyRectification(cam, where, rectifyExplicit, outWidth, outHeight, K);
+  return K;
+}
+
+// Lines 3 (rectification target) and 4 (optional output size, default the input size) of a DSO camera.txt.
+void applyDsoRectification(vpHSlamCamera &cam, const std::vector<hslam::TextLine> &lines, const std::string &path,
+                           unsigned int width, unsigned int height)
+{
+  unsigned int outWidth = width, outHeight = height;
+  if (lines.size() >= kDsoOutputSizeLine) {
+    parseSizeLine(lines[kDsoOutputSizeLine - 1], path, "output image size", outWidth, outHeight);
+  }
+
+  const hslam::TextLine &rectLine = lines[kDsoRectificationLine - 1];
+  const std::string where = fileLine(path, rectLine.number);
+  const std::vector<std::string> tokens = hslam::splitWhitespace(rectLine.text);
+  if (tokens.size() != 1) {
+    const vpCameraParameters K = parseExplicitRectification(tokens, rectLine, path, outWidth, outHeight);
+    applyRectification(cam, where, vpHSlamCamera::rectifyExplicit, outWidth, outHeight, K);
+  } else if (tokens[0] == "crop") {
+    applyRectification(cam, where, vpHSlamCamera::rectifyCrop, outWidth, outHeight);
+  } else if (tokens[0] == "full") {
+    applyRectification(cam, where, vpHSlamCamera::rectifyFull, outWidth, outHeight);
+  } else if (tokens[0] == "none") {
+    if (outWidth != width || outHeight != height) {
+      // DSO: rectification "none" requires the output size to equal the input size.
+      throw vpHSlamException(vpHSlamException::invalidCalibration,
+                             fileLine(path, kDsoOutputSizeLine) + ": rectification 'none' needs the output size " +
+                                 std::to_string(outWidth) + "x" + std::to_string(outHeight) +
+                                 " to equal the input size " + std::to_string(width) + "x" + std::to_string(height));
+    }
+    applyRectification(cam, where, vpHSlamCamera::rectifyNone, outWidth, outHeight);
+  } else {
+    throw vpHSlamException(vpHSlamException::parseError,
+                           where + ": rectification '" + tokens[0] + "' is not crop, full, none or 'fx fy cx cy 0'");
+  }
+}
+} // namespace
+
+vpHSlamCamera vpHSlamCamera::loadDso(const std::string &path)
+{
+  const std::vector<hslam::TextLine> lines = readDsoLines(path);
+
+  // Line 1: model and parameters (fx fy cx cy, then the model's).
+  const hslam::TextLine &modelLine = lines[kDsoModelLine - 1];
+  const std::vector<std::string> tokens = hslam::splitWhitespace(modelLine.text);
+  Model model = pinhole;
+  std::vector<double> values;
+  double unused = 0.0;
+  if (hslam::tryParseDouble(tokens[0], unused)) {
+    parseLegacyModelLine(tokens, modelLine, path, model, values);
+  } else {
+    parseKeywordModelLine(tokens, modelLine, path, model, values);
+  }
+
+  // Line 2: input size.
+  if (lines.size() < kDsoInputSizeLine) {
+    throw vpHSlamException(vpHSlamException::parseError,
+                           fileLine(path, kDsoInputSizeLine) + ": missing input image size line 'width height'");
+  }
+  unsigned int width = 0, height = 0;
+  parseSizeLine(lines[kDsoInputSizeLine - 1], path, "input image size", width, height);
+
+  double fx = values[0], fy = values[1], cx = values[2], cy = values[3];
+  if (isRelative(cx, cy)) {
+    relativeToPixels(width, height, fx, fy, cx, cy);
+  }
+  const std::vector<double> distortion(values.begin() + kIntrinsicCount, values.end());
+  vpHSlamCamera cam = makeCamera(fileLine(path, modelLine.number), model, width, height, fx, fy, cx, cy, distortion);
+
+  if (lines.size() < kDsoRectificationLine) {
+    setDefaultRectification(cam, path);
+  } else {
+    applyDsoRectification(cam, lines, path, width, height);
+  }
   return cam;
 }
 

@@ -59,86 +59,112 @@ std::unique_ptr<vpFont> makeFont()
 }
 } // namespace
 
-void vpHSlamTrajectoryEvaluator::drawTopView(vpImage<vpRGBa> &I, const vpHSlamTrajectory &groundTruth,
-                                             const vpHSlamTrajectory &estimate, const std::string &caption,
-                                             unsigned int width, unsigned int height)
+namespace
 {
-  if (width <= 2 * kMarginPixels || height <= 2 * kMarginPixels) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, "drawTopView: image too small");
+//! The plane of largest spread of a trajectory (its principal axes): a top view for ground vehicles and drones
+//! whatever the dataset's "up" axis is.
+struct PrincipalPlane {
+  Eigen::Vector3d centroid, axisU, axisV;
+  Eigen::Vector2d project(const Eigen::Vector3d &p) const
+  {
+    return Eigen::Vector2d(axisU.dot(p - centroid), axisV.dot(p - centroid));
   }
-  I.resize(height, width, vpRGBa(kBackground.R, kBackground.G, kBackground.B));
-  const std::vector<Eigen::Vector3d> gt = positionsOf(groundTruth);
-  const std::vector<Eigen::Vector3d> est = positionsOf(estimate);
-  const std::vector<Eigen::Vector3d> &reference = gt.empty() ? est : gt;
-  if (reference.empty()) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, "drawTopView: both trajectories are empty");
-  }
+};
 
-  // Principal axes of the ground truth: the picture shows the plane of largest spread (a top view for ground
-  // vehicles and drones whatever the dataset's "up" axis is).
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+PrincipalPlane principalPlane(const std::vector<Eigen::Vector3d> &reference)
+{
+  PrincipalPlane plane;
+  plane.centroid = Eigen::Vector3d::Zero();
   for (const Eigen::Vector3d &p : reference) {
-    centroid += p;
+    plane.centroid += p;
   }
-  centroid /= static_cast<double>(reference.size());
+  plane.centroid /= static_cast<double>(reference.size());
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   for (const Eigen::Vector3d &p : reference) {
-    covariance += (p - centroid) * (p - centroid).transpose();
+    covariance += (p - plane.centroid) * (p - plane.centroid).transpose();
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(covariance);
-  Eigen::Vector3d axisU = eigen.eigenvectors().col(2); // eigenvalues ascending: largest last
+  plane.axisU = eigen.eigenvectors().col(2); // eigenvalues ascending: largest last
   // Eigenvector signs are arbitrary: orient the main axis so the trajectory runs from left to right.
-  if (axisU.dot(reference.back() - reference.front()) < 0.) {
-    axisU = -axisU;
+  if (plane.axisU.dot(reference.back() - reference.front()) < 0.) {
+    plane.axisU = -plane.axisU;
   }
-  const Eigen::Vector3d axisV = eigen.eigenvectors().col(1);
-  auto project = [&](const Eigen::Vector3d &p) {
-    return Eigen::Vector2d(axisU.dot(p - centroid), axisV.dot(p - centroid));
-  };
+  plane.axisV = eigen.eigenvectors().col(1);
+  return plane;
+}
 
+//! Plane coordinates to image pixels: equal axes, the projected trajectories centred in the plot area.
+struct PlotScale {
+  Eigen::Vector2d mid, extent;
+  double pixelsPerUnit;
+  unsigned int width, height;
+  vpImagePoint toPixel(const Eigen::Vector2d &q) const
+  {
+    // Image rows grow downwards: flip v so the picture is not mirrored.
+    return vpImagePoint(0.5 * height - (q.y() - mid.y()) * pixelsPerUnit,
+                        0.5 * width + (q.x() - mid.x()) * pixelsPerUnit);
+  }
+};
+
+PlotScale fitPlot(const PrincipalPlane &plane, const std::vector<Eigen::Vector3d> &gt,
+                  const std::vector<Eigen::Vector3d> &est, unsigned int width, unsigned int height)
+{
   Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::max());
   Eigen::Vector2d hi = -lo;
   for (const std::vector<Eigen::Vector3d> *list : {&gt, &est}) {
     for (const Eigen::Vector3d &p : *list) {
-      const Eigen::Vector2d q = project(p);
+      const Eigen::Vector2d q = plane.project(p);
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
   }
-  const Eigen::Vector2d extent = (hi - lo).cwiseMax(1e-6);
+  PlotScale plot;
+  plot.extent = (hi - lo).cwiseMax(1e-6);
   const double plotW = width - 2. * kMarginPixels;
   const double plotH = height - 2. * kMarginPixels;
-  const double pixelsPerUnit = std::min(plotW / extent.x(), plotH / extent.y()); // equal axes
-  const Eigen::Vector2d mid = 0.5 * (lo + hi);
-  auto toPixel = [&](const Eigen::Vector2d &q) {
-    // Image rows grow downwards: flip v so the picture is not mirrored.
-    return vpImagePoint(0.5 * height - (q.y() - mid.y()) * pixelsPerUnit,
-                        0.5 * width + (q.x() - mid.x()) * pixelsPerUnit);
-  };
+  plot.pixelsPerUnit = std::min(plotW / plot.extent.x(), plotH / plot.extent.y()); // equal axes
+  plot.mid = 0.5 * (lo + hi);
+  plot.width = width;
+  plot.height = height;
+  return plot;
+}
 
-  // Grid, aligned with the projected origin (the ground-truth centroid).
-  const double step = niceStep(std::max(extent.x(), extent.y()) / kTargetGridLines);
-  const double uMin = mid.x() - 0.5 * width / pixelsPerUnit, uMax = mid.x() + 0.5 * width / pixelsPerUnit;
-  const double vMin = mid.y() - 0.5 * height / pixelsPerUnit, vMax = mid.y() + 0.5 * height / pixelsPerUnit;
+//! Grid lines across the whole image, aligned with the projected origin (the ground-truth centroid); the step.
+double drawGrid(vpImage<vpRGBa> &I, const PlotScale &plot)
+{
+  const double step = niceStep(std::max(plot.extent.x(), plot.extent.y()) / kTargetGridLines);
+  const Eigen::Vector2d &mid = plot.mid;
+  const double uMin = mid.x() - 0.5 * plot.width / plot.pixelsPerUnit;
+  const double uMax = mid.x() + 0.5 * plot.width / plot.pixelsPerUnit;
+  const double vMin = mid.y() - 0.5 * plot.height / plot.pixelsPerUnit;
+  const double vMax = mid.y() + 0.5 * plot.height / plot.pixelsPerUnit;
   for (double u = std::ceil(uMin / step) * step; u <= uMax; u += step) {
-    vpImageDraw::drawLine(I, toPixel(Eigen::Vector2d(u, vMin)), toPixel(Eigen::Vector2d(u, vMax)), kGridColour, 1);
+    vpImageDraw::drawLine(I, plot.toPixel(Eigen::Vector2d(u, vMin)), plot.toPixel(Eigen::Vector2d(u, vMax)),
+                          kGridColour, 1);
   }
   for (double v = std::ceil(vMin / step) * step; v <= vMax; v += step) {
-    vpImageDraw::drawLine(I, toPixel(Eigen::Vector2d(uMin, v)), toPixel(Eigen::Vector2d(uMax, v)), kGridColour, 1);
+    vpImageDraw::drawLine(I, plot.toPixel(Eigen::Vector2d(uMin, v)), plot.toPixel(Eigen::Vector2d(uMax, v)),
+                          kGridColour, 1);
   }
+  return step;
+}
 
-  auto drawPath = [&](const std::vector<Eigen::Vector3d> &list, const vpColor &colour) {
-    for (size_t i = 1; i < list.size(); ++i) {
-      vpImageDraw::drawLine(I, toPixel(project(list[i - 1])), toPixel(project(list[i])), colour, kLineThickness);
-    }
-    if (!list.empty()) {
-      vpImageDraw::drawCircle(I, toPixel(project(list.front())), kStartMarkerRadius, colour, kLineThickness);
-    }
-  };
-  drawPath(gt, kGroundTruthColour);
-  drawPath(est, kEstimateColour);
+//! A trajectory as a polyline, its start circled.
+void drawPath(vpImage<vpRGBa> &I, const PrincipalPlane &plane, const PlotScale &plot,
+              const std::vector<Eigen::Vector3d> &list, const vpColor &colour)
+{
+  for (size_t i = 1; i < list.size(); ++i) {
+    vpImageDraw::drawLine(I, plot.toPixel(plane.project(list[i - 1])), plot.toPixel(plane.project(list[i])), colour,
+                          kLineThickness);
+  }
+  if (!list.empty()) {
+    vpImageDraw::drawCircle(I, plot.toPixel(plane.project(list.front())), kStartMarkerRadius, colour, kLineThickness);
+  }
+}
 
-  // Legend, grid spacing, caption.
+//! Caption (top left), legend and grid spacing (bottom left).
+void drawLegend(vpImage<vpRGBa> &I, const std::string &caption, double step, unsigned int height)
+{
   std::unique_ptr<vpFont> font = makeFont();
   const double lineGap = 1.5 * kFontHeight;
   const double left = 0.5 * kMarginPixels;
@@ -160,4 +186,28 @@ void vpHSlamTrajectoryEvaluator::drawTopView(vpImage<vpRGBa> &I, const vpHSlamTr
   char text[128];
   std::snprintf(text, sizeof(text), "grid %g m, circles = start", step);
   font->drawText(I, text, vpImagePoint(row - 0.6 * kFontHeight, left), kTextColour);
+}
+} // namespace
+
+void vpHSlamTrajectoryEvaluator::drawTopView(vpImage<vpRGBa> &I, const vpHSlamTrajectory &groundTruth,
+                                             const vpHSlamTrajectory &estimate, const std::string &caption,
+                                             unsigned int width, unsigned int height)
+{
+  if (width <= 2 * kMarginPixels || height <= 2 * kMarginPixels) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "drawTopView: image too small");
+  }
+  I.resize(height, width, vpRGBa(kBackground.R, kBackground.G, kBackground.B));
+  const std::vector<Eigen::Vector3d> gt = positionsOf(groundTruth);
+  const std::vector<Eigen::Vector3d> est = positionsOf(estimate);
+  const std::vector<Eigen::Vector3d> &reference = gt.empty() ? est : gt;
+  if (reference.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "drawTopView: both trajectories are empty");
+  }
+  // The picture shows the plane of largest spread of the ground truth (of the estimate when there is none).
+  const PrincipalPlane plane = principalPlane(reference);
+  const PlotScale plot = fitPlot(plane, gt, est, width, height);
+  const double step = drawGrid(I, plot);
+  drawPath(I, plane, plot, gt, kGroundTruthColour);
+  drawPath(I, plane, plot, est, kEstimateColour);
+  drawLegend(I, caption, step, height);
 }

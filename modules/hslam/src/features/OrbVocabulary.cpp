@@ -135,15 +135,19 @@ std::uint64_t hashBytes(const void *data, std::size_t size, std::uint64_t seed)
   return h;
 }
 
-void OrbVocabulary::assign(Parts parts, const std::string &origin)
+namespace
+{
+//! The tree's parameters are within bounds and its parts' sizes agree.
+void checkSizes(const OrbVocabulary::Parts &parts, const std::string &origin)
 {
   const std::size_t nodes = parts.parents.size();
-  if (parts.branching < 2 || parts.branching > kMaxBranching) {
+  if (parts.branching < 2 || parts.branching > OrbVocabulary::kMaxBranching) {
     badTree(origin, "branching factor k = " + std::to_string(parts.branching) + " outside [2, " +
-                        std::to_string(kMaxBranching) + "]");
+                        std::to_string(OrbVocabulary::kMaxBranching) + "]");
   }
-  if (parts.levels < 1 || parts.levels > kMaxLevels) {
-    badTree(origin, "depth L = " + std::to_string(parts.levels) + " outside [1, " + std::to_string(kMaxLevels) + "]");
+  if (parts.levels < 1 || parts.levels > OrbVocabulary::kMaxLevels) {
+    badTree(origin, "depth L = " + std::to_string(parts.levels) + " outside [1, " +
+                        std::to_string(OrbVocabulary::kMaxLevels) + "]");
   }
   if (nodes < 2 || parts.wordNodes.empty()) {
     badTree(origin, "empty (no word)");
@@ -151,12 +155,19 @@ void OrbVocabulary::assign(Parts parts, const std::string &origin)
   if (parts.descriptors.size() != nodes || parts.wordWeights.size() != parts.wordNodes.size()) {
     badTree(origin, "inconsistent node or word counts");
   }
-  if (nodes >= kNoWord || parts.wordNodes.size() >= kNoWord) {
+  if (nodes >= OrbVocabulary::kNoWord || parts.wordNodes.size() >= OrbVocabulary::kNoWord) {
     badTree(origin, "too many nodes");
   }
+}
 
-  std::vector<std::uint8_t> depths(nodes, 0);
-  std::vector<std::uint32_t> childCount(nodes, 0);
+//! Every parent precedes its child, no node lies deeper than L and none has more than k children; each node's
+//! depth and number of children.
+void checkTree(const OrbVocabulary::Parts &parts, const std::string &origin, std::vector<std::uint8_t> &depths,
+               std::vector<std::uint32_t> &childCount)
+{
+  const std::size_t nodes = parts.parents.size();
+  depths.assign(nodes, 0);
+  childCount.assign(nodes, 0);
   for (std::size_t n = 1; n < nodes; ++n) {
     const std::uint32_t p = parts.parents[n];
     if (p >= n) {
@@ -171,13 +182,21 @@ void OrbVocabulary::assign(Parts parts, const std::string &origin)
               "node " + std::to_string(p) + " has more than k = " + std::to_string(parts.branching) + " children");
     }
   }
-  std::vector<std::uint32_t> nodeWords(nodes, kNoWord);
+}
+
+//! Each word is its own leaf with a finite, non-negative weight, and every leaf is a word: each node's word
+//! (kNoWord for inner nodes).
+std::vector<std::uint32_t> nodeWordsOf(const OrbVocabulary::Parts &parts, const std::vector<std::uint32_t> &childCount,
+                                       const std::string &origin)
+{
+  const std::size_t nodes = parts.parents.size();
+  std::vector<std::uint32_t> nodeWords(nodes, OrbVocabulary::kNoWord);
   for (std::size_t w = 0; w < parts.wordNodes.size(); ++w) {
     const std::uint32_t n = parts.wordNodes[w];
     if (n == 0 || n >= nodes) {
       badTree(origin, "word " + std::to_string(w) + " refers to node " + std::to_string(n) + ", not a leaf");
     }
-    if (nodeWords[n] != kNoWord) {
+    if (nodeWords[n] != OrbVocabulary::kNoWord) {
       badTree(origin, "node " + std::to_string(n) + " is both word " + std::to_string(nodeWords[n]) + " and word " +
                           std::to_string(w));
     }
@@ -187,7 +206,7 @@ void OrbVocabulary::assign(Parts parts, const std::string &origin)
     nodeWords[n] = static_cast<std::uint32_t>(w);
   }
   for (std::size_t n = 1; n < nodes; ++n) {
-    if ((childCount[n] == 0) != (nodeWords[n] != kNoWord)) {
+    if ((childCount[n] == 0) != (nodeWords[n] != OrbVocabulary::kNoWord)) {
       badTree(origin, "node " + std::to_string(n) +
                           (childCount[n] == 0 ? " is a leaf without a word" : " has children and is also a word"));
     }
@@ -195,8 +214,13 @@ void OrbVocabulary::assign(Parts parts, const std::string &origin)
   if (childCount[0] == 0) {
     badTree(origin, "the root has no children");
   }
+  return nodeWords;
+}
+} // namespace
 
-  // Children in compressed rows, in node order (so descent ties go to the first child, as DBoW2).
+void OrbVocabulary::buildChildTables(const Parts &parts, const std::vector<std::uint32_t> &childCount)
+{
+  const std::size_t nodes = parts.parents.size();
   m_childBegin.assign(nodes + 1, 0);
   for (std::size_t n = 0; n < nodes; ++n) {
     m_childBegin[n + 1] = m_childBegin[n] + childCount[n];
@@ -212,6 +236,17 @@ void OrbVocabulary::assign(Parts parts, const std::string &origin)
     m_nodeSlots[n] = position + 1;
     m_childDescriptors[position + 1] = parts.descriptors[n];
   }
+}
+
+void OrbVocabulary::assign(Parts parts, const std::string &origin)
+{
+  checkSizes(parts, origin);
+  std::vector<std::uint8_t> depths;
+  std::vector<std::uint32_t> childCount;
+  checkTree(parts, origin, depths, childCount);
+  std::vector<std::uint32_t> nodeWords = nodeWordsOf(parts, childCount, origin);
+  // Children in compressed rows, in node order (so descent ties go to the first child, as DBoW2).
+  buildChildTables(parts, childCount);
 
   m_branching = parts.branching;
   m_levels = parts.levels;

@@ -123,6 +123,8 @@ private:
   std::uint32_t closestChild(const OrbDescriptor &d, std::uint32_t node) const;
   void transformInto(const std::vector<OrbDescriptor> &descriptors, BowVector &bow, FeatureVector *direct,
                      int indexDepth) const;
+  //! Children of every node in compressed rows (m_childBegin, m_children), their slots and descriptors.
+  void buildChildTables(const Parts &parts, const std::vector<std::uint32_t> &childCount);
 
   int m_branching = 0;
   int m_levels = 0;

@@ -186,6 +186,98 @@ void PixelSelector::computeThresholds(const PyramidLevel &level0)
   }
 }
 
+void PixelSelector::inheritTakenBlocks(int level, int blockSize, int w, int h, int nbx)
+{
+  std::vector<unsigned char> &taken = m_taken[level];
+  const int childSize = blockSize / 2;
+  const int ncx = (w + childSize - 1) / childSize;
+  const int ncy = (h + childSize - 1) / childSize;
+  const std::vector<unsigned char> &child = m_taken[level - 1];
+  for (int cy = 0; cy < ncy; ++cy) {
+    for (int cx = 0; cx < ncx; ++cx) {
+      if (child[static_cast<size_t>(cy * ncx + cx)]) {
+        taken[static_cast<size_t>((cy / 2) * nbx + cx / 2)] = 1;
+      }
+    }
+  }
+}
+
+void PixelSelector::resetBlockRow(unsigned int seed, int level, int by, int nbx)
+{
+  for (int bx = 0; bx < nbx; ++bx) {
+    m_bestScore[static_cast<size_t>(bx)] = -1.f;
+    m_bestIndex[static_cast<size_t>(bx)] = -1;
+    m_blockDir[static_cast<size_t>(bx)] = static_cast<int>(
+        hashBlock(seed, static_cast<uint32_t>(level), static_cast<uint32_t>(bx), static_cast<uint32_t>(by)) %
+        kNumDirections);
+  }
+}
+
+void PixelSelector::fillRowThreshold(int thRowIndex, int cellRowIndex, float factor, const OccupancyGrid *occupied,
+                                     int w)
+{
+  float *rowTh = m_rowThreshold.data();
+  const float *thRow = m_thSmoothSq.data() + static_cast<size_t>(thRowIndex) * m_thCols;
+  for (int x = 0; x < w; ++x) {
+    rowTh[x] = factor * thRow[m_thColOf[static_cast<size_t>(x)]];
+  }
+  if (occupied) {
+    const unsigned char *occRow = occupied->cellRow(cellRowIndex);
+    for (int x = 0; x < w; ++x) {
+      if (occRow[m_occColOf[static_cast<size_t>(x)]]) {
+        rowTh[x] = std::numeric_limits<float>::infinity();
+      }
+    }
+  }
+}
+
+void PixelSelector::collectBlockRow(int level, int w, int nbx, unsigned char *takenRow)
+{
+  for (int bx = 0; bx < nbx; ++bx) {
+    const int index = m_bestIndex[static_cast<size_t>(bx)];
+    if (index >= 0) {
+      SelectedPixel p;
+      p.u = index % w;
+      p.v = index / w;
+      p.level = level;
+      m_candidates.push_back(p);
+      takenRow[bx] = 1;
+    }
+  }
+}
+
+void PixelSelector::scanRow(const Eigen::Vector3f *colorRow, const float *gradRow, int level, int rowBase, int w,
+                            int blockSize, int nbx, const unsigned char *takenRow)
+{
+  const int xMin = kSelectionBorder;
+  const int xEnd = w - kSelectionBorder; // exclusive
+  const float *rowTh = m_rowThreshold.data();
+  for (int bx = 0; bx < nbx; ++bx) {
+    if (takenRow[bx]) {
+      continue;
+    }
+    const int x0 = std::max(bx * blockSize, xMin);
+    const int x1 = std::min(bx * blockSize + blockSize, xEnd);
+    const float du = m_dirU[m_blockDir[static_cast<size_t>(bx)]];
+    const float dv = m_dirV[m_blockDir[static_cast<size_t>(bx)]];
+    float best = m_bestScore[static_cast<size_t>(bx)];
+    int bestIndex = m_bestIndex[static_cast<size_t>(bx)];
+    for (int x = x0; x < x1; ++x) {
+      // DSO: among pixels above the threshold, rank by the level-0 gradient projected on the block's random
+      // direction (a branch-free variant measured 6 % slower: it reads every pixel's gradient vector).
+      if (gradRow[x >> level] > rowTh[x]) {
+        const float score = std::fabs(colorRow[x][1] * du + colorRow[x][2] * dv);
+        if (score > best) {
+          best = score;
+          bestIndex = rowBase + x;
+        }
+      }
+    }
+    m_bestScore[static_cast<size_t>(bx)] = best;
+    m_bestIndex[static_cast<size_t>(bx)] = bestIndex;
+  }
+}
+
 void PixelSelector::selectLevel(const ImagePyramid &pyramid, int level, int blockSize, unsigned int seed,
                                 const OccupancyGrid *occupied)
 {
@@ -198,26 +290,13 @@ void PixelSelector::selectLevel(const ImagePyramid &pyramid, int level, int bloc
   std::vector<unsigned char> &taken = m_taken[level];
   taken.assign(static_cast<size_t>(nbx) * static_cast<size_t>(nby), 0);
   if (level > 0) {
-    // A coarser block only picks where none of its four finer blocks did (DSO).
-    const int childSize = blockSize / 2;
-    const int ncx = (w + childSize - 1) / childSize;
-    const int ncy = (h + childSize - 1) / childSize;
-    const std::vector<unsigned char> &child = m_taken[level - 1];
-    for (int cy = 0; cy < ncy; ++cy) {
-      for (int cx = 0; cx < ncx; ++cx) {
-        if (child[static_cast<size_t>(cy * ncx + cx)]) {
-          taken[static_cast<size_t>((cy / 2) * nbx + cx / 2)] = 1;
-        }
-      }
-    }
+    inheritTakenBlocks(level, blockSize, w, h, nbx);
   }
   m_bestScore.resize(static_cast<size_t>(nbx));
   m_bestIndex.resize(static_cast<size_t>(nbx));
   m_blockDir.resize(static_cast<size_t>(nbx));
 
   const float factor = m_levelFactor[level];
-  const int xMin = kSelectionBorder;
-  const int xEnd = w - kSelectionBorder; // exclusive
   const int yMin = kSelectionBorder;
   const int yEnd = h - kSelectionBorder;
   const int bs = m_params.selectionBlockSize;
@@ -227,7 +306,6 @@ void PixelSelector::selectLevel(const ImagePyramid &pyramid, int level, int bloc
   // with the threshold-block row and the occupancy-cell row, so it is refilled rarely and the pixel loop reads
   // it linearly with a single comparison.
   m_rowThreshold.resize(static_cast<size_t>(w));
-  float *rowTh = m_rowThreshold.data();
   int filledThRow = -1, filledCellRow = -1;
 
   for (int by = 0; by < nby; ++by) {
@@ -237,72 +315,21 @@ void PixelSelector::selectLevel(const ImagePyramid &pyramid, int level, int bloc
       continue;
     }
     unsigned char *takenRow = &taken[static_cast<size_t>(by) * nbx];
-    for (int bx = 0; bx < nbx; ++bx) {
-      m_bestScore[static_cast<size_t>(bx)] = -1.f;
-      m_bestIndex[static_cast<size_t>(bx)] = -1;
-      m_blockDir[static_cast<size_t>(bx)] = static_cast<int>(
-          hashBlock(seed, static_cast<uint32_t>(level), static_cast<uint32_t>(bx), static_cast<uint32_t>(by)) %
-          kNumDirections);
-    }
+    resetBlockRow(seed, level, by, nbx);
     for (int y = y0; y < y1; ++y) {
       const int thRowIndex = std::min(y / bs, m_thRows - 1);
       const int cellRowIndex = occupied ? y / cellSize : 0;
       if (thRowIndex != filledThRow || cellRowIndex != filledCellRow) {
         filledThRow = thRowIndex;
         filledCellRow = cellRowIndex;
-        const float *thRow = m_thSmoothSq.data() + static_cast<size_t>(thRowIndex) * m_thCols;
-        for (int x = 0; x < w; ++x) {
-          rowTh[x] = factor * thRow[m_thColOf[static_cast<size_t>(x)]];
-        }
-        if (occupied) {
-          const unsigned char *occRow = occupied->cellRow(cellRowIndex);
-          for (int x = 0; x < w; ++x) {
-            if (occRow[m_occColOf[static_cast<size_t>(x)]]) {
-              rowTh[x] = std::numeric_limits<float>::infinity();
-            }
-          }
-        }
+        fillRowThreshold(thRowIndex, cellRowIndex, factor, occupied, w);
       }
       const Eigen::Vector3f *colorRow = l0.color.data() + static_cast<size_t>(y) * w;
       // No clamping: with the border of 4 px, x >> l < floor(w / 2^l) (resp. y) for the levels l <= 2 used here.
       const float *gradRow = ll.gradSq.data() + static_cast<size_t>(y >> level) * wl;
-      const int rowBase = y * w;
-      for (int bx = 0; bx < nbx; ++bx) {
-        if (takenRow[bx]) {
-          continue;
-        }
-        const int x0 = std::max(bx * blockSize, xMin);
-        const int x1 = std::min(bx * blockSize + blockSize, xEnd);
-        const float du = m_dirU[m_blockDir[static_cast<size_t>(bx)]];
-        const float dv = m_dirV[m_blockDir[static_cast<size_t>(bx)]];
-        float best = m_bestScore[static_cast<size_t>(bx)];
-        int bestIndex = m_bestIndex[static_cast<size_t>(bx)];
-        for (int x = x0; x < x1; ++x) {
-          // DSO: among pixels above the threshold, rank by the level-0 gradient projected on the block's random
-          // direction (a branch-free variant measured 6 % slower: it reads every pixel's gradient vector).
-          if (gradRow[x >> level] > rowTh[x]) {
-            const float score = std::fabs(colorRow[x][1] * du + colorRow[x][2] * dv);
-            if (score > best) {
-              best = score;
-              bestIndex = rowBase + x;
-            }
-          }
-        }
-        m_bestScore[static_cast<size_t>(bx)] = best;
-        m_bestIndex[static_cast<size_t>(bx)] = bestIndex;
-      }
+      scanRow(colorRow, gradRow, level, y * w, w, blockSize, nbx, takenRow);
     }
-    for (int bx = 0; bx < nbx; ++bx) {
-      const int index = m_bestIndex[static_cast<size_t>(bx)];
-      if (index >= 0) {
-        SelectedPixel p;
-        p.u = index % w;
-        p.v = index / w;
-        p.level = level;
-        m_candidates.push_back(p);
-        takenRow[bx] = 1;
-      }
-    }
+    collectBlockRow(level, w, nbx, takenRow);
   }
 }
 

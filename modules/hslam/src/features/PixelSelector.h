@@ -147,6 +147,18 @@ private:
   int selectOnce(const ImagePyramid &pyramid, int potential, unsigned int seed, const OccupancyGrid *occupied);
   void selectLevel(const ImagePyramid &pyramid, int level, int blockSize, unsigned int seed,
                    const OccupancyGrid *occupied);
+  //! Marks the blocks of \e level (nbx per row; image w x h) in which a finer level already picked a pixel (DSO).
+  void inheritTakenBlocks(int level, int blockSize, int w, int h, int nbx);
+  //! Blocks of row \e by: no best pixel yet, and the pseudo-random direction their gradients are ranked along.
+  void resetBlockRow(unsigned int seed, int level, int by, int nbx);
+  //! m_rowThreshold for one pixel row of width \e w: level factor times the block threshold, +inf in occupied cells.
+  void fillRowThreshold(int thRowIndex, int cellRowIndex, float factor, const OccupancyGrid *occupied, int w);
+  //! One pixel row (offset \e rowBase): in each free block, the pixel above the threshold with the largest gradient
+  //! along the block's direction so far (DSO).
+  void scanRow(const Eigen::Vector3f *colorRow, const float *gradRow, int level, int rowBase, int w, int blockSize,
+               int nbx, const unsigned char *takenRow);
+  //! The best pixel of each block of a row (image width \e w) becomes a candidate and takes its block.
+  void collectBlockRow(int level, int w, int nbx, unsigned char *takenRow);
   void subsample(int count, unsigned int seed);
 
   vpHSlamParameters::Features m_params;

@@ -265,66 +265,63 @@ OrbVocabulary loadVocabularyDbow2Text(const std::string &path)
   return vocabulary;
 }
 
-void saveVocabulary(const OrbVocabulary &vocabulary, const std::string &path, VocabularyFormat format)
+namespace
 {
-  if (vocabulary.empty()) {
-    throw vpHSlamException(vpHSlamException::invalidArgument, path + ": cannot save an empty vocabulary");
-  }
-  const OrbVocabulary::Parts parts = vocabulary.parts();
+//! Our binary format: header, node records (parent, descriptor), word records (node, weight), checksum.
+void saveBinary(const OrbVocabulary::Parts &parts, const std::string &path)
+{
   const std::size_t nodes = parts.parents.size(), words = parts.wordNodes.size();
-  if (format == VocabularyFormat::binary || format == VocabularyFormat::automatic) {
-    ByteWriter writer;
-    std::string &bytes = writer.bytes();
-    bytes.reserve(kHeaderBytes + (nodes - 1) * kNodeRecordBytes + words * kWordRecordBytes + kChecksumBytes);
-    bytes.append(kMagic, 8);
-    writer.u32(kBinaryVersion);
-    writer.u32(kOrbDescriptorBytes);
-    writer.u32(static_cast<std::uint32_t>(parts.branching));
-    writer.u32(static_cast<std::uint32_t>(parts.levels));
-    writer.u32(static_cast<std::uint32_t>(parts.weighting));
-    writer.u32(static_cast<std::uint32_t>(parts.scoring));
-    writer.u32(static_cast<std::uint32_t>(nodes));
-    writer.u32(static_cast<std::uint32_t>(words));
-    for (std::size_t n = 1; n < nodes; ++n) {
-      writer.u32(parts.parents[n]);
-      for (int j = 0; j < kOrbDescriptorBytes; ++j) {
-        bytes.push_back(static_cast<char>(parts.descriptors[n].byte(j)));
-      }
+  ByteWriter writer;
+  std::string &bytes = writer.bytes();
+  bytes.reserve(kHeaderBytes + (nodes - 1) * kNodeRecordBytes + words * kWordRecordBytes + kChecksumBytes);
+  bytes.append(kMagic, 8);
+  writer.u32(kBinaryVersion);
+  writer.u32(kOrbDescriptorBytes);
+  writer.u32(static_cast<std::uint32_t>(parts.branching));
+  writer.u32(static_cast<std::uint32_t>(parts.levels));
+  writer.u32(static_cast<std::uint32_t>(parts.weighting));
+  writer.u32(static_cast<std::uint32_t>(parts.scoring));
+  writer.u32(static_cast<std::uint32_t>(nodes));
+  writer.u32(static_cast<std::uint32_t>(words));
+  for (std::size_t n = 1; n < nodes; ++n) {
+    writer.u32(parts.parents[n]);
+    for (int j = 0; j < kOrbDescriptorBytes; ++j) {
+      bytes.push_back(static_cast<char>(parts.descriptors[n].byte(j)));
     }
-    for (std::size_t w = 0; w < words; ++w) {
-      writer.u32(parts.wordNodes[w]);
-      std::uint64_t bits = 0;
-      std::memcpy(&bits, &parts.wordWeights[w], sizeof(double));
-      writer.u64(bits);
-    }
-    writer.u64(hashBytes(bytes.data(), bytes.size()));
-    writeFileAtomically(path, bytes, "vocabulary file");
-    return;
   }
-
-  std::vector<double> nodeWeights(nodes, 0.0);
-  std::vector<bool> leaf(nodes, false);
   for (std::size_t w = 0; w < words; ++w) {
-    nodeWeights[parts.wordNodes[w]] = parts.wordWeights[w];
-    leaf[parts.wordNodes[w]] = true;
+    writer.u32(parts.wordNodes[w]);
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &parts.wordWeights[w], sizeof(double));
+    writer.u64(bits);
   }
-  if (format == VocabularyFormat::dbow2Text) {
-    // Words are numbered by leaf order when read back: identical ids when they already are (trained vocabularies).
-    std::string out = std::to_string(parts.branching) + " " + std::to_string(parts.levels) + " " +
-                      std::to_string(static_cast<int>(parts.scoring)) + " " +
-                      std::to_string(static_cast<int>(parts.weighting)) + "\n";
-    for (std::size_t n = 1; n < nodes; ++n) {
-      out += std::to_string(parts.parents[n]);
-      out += leaf[n] ? " 1 " : " 0 ";
-      out += descriptorToText(parts.descriptors[n]);
-      appendNumber(out, nodeWeights[n], std::chars_format::general, 17); // exact double round trip
-      out += '\n';
-    }
-    writeFileAtomically(path, out, "vocabulary file");
-    return;
-  }
+  writer.u64(hashBytes(bytes.data(), bytes.size()));
+  writeFileAtomically(path, bytes, "vocabulary file");
+}
 
-  // DBoW2 YAML through cv::FileStorage (gzip when the name ends with .gz), nodes breadth-first as DBoW2 writes them.
+//! DBoW2's text format: one line per node (parent, leaf flag, descriptor, weight) after the parameters line.
+void saveDbow2Text(const OrbVocabulary::Parts &parts, const std::vector<double> &nodeWeights,
+                   const std::vector<bool> &leaf, const std::string &path)
+{
+  // Words are numbered by leaf order when read back: identical ids when they already are (trained vocabularies).
+  std::string out = std::to_string(parts.branching) + " " + std::to_string(parts.levels) + " " +
+                    std::to_string(static_cast<int>(parts.scoring)) + " " +
+                    std::to_string(static_cast<int>(parts.weighting)) + "\n";
+  for (std::size_t n = 1; n < parts.parents.size(); ++n) {
+    out += std::to_string(parts.parents[n]);
+    out += leaf[n] ? " 1 " : " 0 ";
+    out += descriptorToText(parts.descriptors[n]);
+    appendNumber(out, nodeWeights[n], std::chars_format::general, 17); // exact double round trip
+    out += '\n';
+  }
+  writeFileAtomically(path, out, "vocabulary file");
+}
+
+//! DBoW2 YAML through cv::FileStorage (gzip when the name ends with .gz), nodes breadth-first as DBoW2 writes them;
+//! written to a temporary file renamed at the end.
+void saveDbow2Yaml(const OrbVocabulary::Parts &parts, const std::vector<double> &nodeWeights, const std::string &path)
+{
+  const std::size_t nodes = parts.parents.size(), words = parts.wordNodes.size();
   const std::string temporary = temporaryWithSameExtension(path);
   try {
     cv::FileStorage fs(temporary, cv::FileStorage::WRITE);
@@ -362,6 +359,32 @@ void saveVocabulary(const OrbVocabulary &vocabulary, const std::string &path, Vo
   if (ec) {
     std::filesystem::remove(temporary, ec);
     throwAt(vpHSlamException::fileUnreadable, path, 0, "cannot write the vocabulary file (rename failed)");
+  }
+}
+} // namespace
+
+void saveVocabulary(const OrbVocabulary &vocabulary, const std::string &path, VocabularyFormat format)
+{
+  if (vocabulary.empty()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, path + ": cannot save an empty vocabulary");
+  }
+  const OrbVocabulary::Parts parts = vocabulary.parts();
+  if (format == VocabularyFormat::binary || format == VocabularyFormat::automatic) {
+    saveBinary(parts, path);
+    return;
+  }
+  // The text formats give each node its weight (0 for inner nodes) and leaf flag.
+  const std::size_t nodes = parts.parents.size(), words = parts.wordNodes.size();
+  std::vector<double> nodeWeights(nodes, 0.0);
+  std::vector<bool> leaf(nodes, false);
+  for (std::size_t w = 0; w < words; ++w) {
+    nodeWeights[parts.wordNodes[w]] = parts.wordWeights[w];
+    leaf[parts.wordNodes[w]] = true;
+  }
+  if (format == VocabularyFormat::dbow2Text) {
+    saveDbow2Text(parts, nodeWeights, leaf, path);
+  } else {
+    saveDbow2Yaml(parts, nodeWeights, path);
   }
 }
 } // namespace hslam

@@ -162,70 +162,50 @@ int intField(const std::vector<std::pair<std::string, std::string>> &fields, con
 }
 } // namespace
 
-OrbVocabulary loadVocabularyDbow2Yaml(const std::string &path)
+namespace
 {
-  // DBoW2's YAML is read by a small parser of its own layout, not by OpenCV's YAML reader, which loops for ever on
-  // some malformed files (found by fuzz_vocabulary_yaml). gzip is inflated here first.
-  std::string text = readVocabularyFile(path);
-  if (text.size() >= 2 && static_cast<unsigned char>(text[0]) == 0x1f && static_cast<unsigned char>(text[1]) == 0x8b) {
-    text = gunzip(text, path);
-  }
-  requireNoNulByte(text, path);
-  // Scalars and the two lists: "key:" at the start of a (trimmed) line.
-  auto keyLine = [&](const std::string &key, std::size_t from) -> std::size_t {
-    std::size_t pos = from;
-    while (pos < text.size()) {
-      std::size_t end = text.find('\n', pos);
-      if (end == std::string::npos) {
-        end = text.size();
-      }
-      const std::string line = trim(text.substr(pos, end - pos));
-      if (line.compare(0, key.size() + 1, key + ":") == 0) {
-        return pos;
-      }
-      pos = end + 1;
+using FlowMaps = std::vector<std::pair<std::size_t, std::string>>;
+
+//! Offset of the first line at or after \e from that starts (trimmed) with "key:", npos when none.
+std::size_t keyLine(const std::string &text, const std::string &key, std::size_t from)
+{
+  std::size_t pos = from;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) {
+      end = text.size();
     }
-    return std::string::npos;
-  };
-  const std::size_t vocabularyAt = keyLine("vocabulary", 0);
-  if (vocabularyAt == std::string::npos) {
-    throwAt(vpHSlamException::parseError, path, 0, "no 'vocabulary' map (not a DBoW2 YAML vocabulary)");
-  }
-  auto scalar = [&](const std::string &key) {
-    const std::size_t at = keyLine(key, vocabularyAt);
-    if (at == std::string::npos) {
-      throwAt(vpHSlamException::parseError, path, 0, "missing or non-integer '" + key + "'");
+    const std::string line = trim(text.substr(pos, end - pos));
+    if (line.compare(0, key.size() + 1, key + ":") == 0) {
+      return pos;
     }
-    const std::size_t end = text.find('\n', at);
-    const std::string line = trim(text.substr(at, end == std::string::npos ? std::string::npos : end - at));
-    std::vector<std::pair<std::string, std::string>> kv = {{key, trim(line.substr(key.size() + 1))}};
-    return intField(kv, key, path, lineAt(text, at));
-  };
-  OrbVocabulary::Parts parts;
-  parts.branching = scalar("k");
-  parts.levels = scalar("L");
-  const int scoring = scalar("scoringType"), weighting = scalar("weightingType");
-  if (scoring > kDbow2MaxScoring || weighting > kDbow2MaxWeighting) {
-    throwAt(vpHSlamException::parseError, path, 0, "unknown scoring or weighting type");
+    pos = end + 1;
   }
-  parts.scoring = static_cast<VocabularyScoring>(scoring);
-  parts.weighting = static_cast<VocabularyWeighting>(weighting);
-  const std::size_t nodesAt = keyLine("nodes", vocabularyAt), wordsAt = keyLine("words", vocabularyAt);
-  if (nodesAt == std::string::npos || wordsAt == std::string::npos || wordsAt < nodesAt) {
-    throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary (no 'nodes' or 'words' list)");
+  return std::string::npos;
+}
+
+//! The integer scalar "key: value" of the vocabulary map (which starts at \e vocabularyAt).
+int scalarField(const std::string &text, const std::string &key, std::size_t vocabularyAt, const std::string &path)
+{
+  const std::size_t at = keyLine(text, key, vocabularyAt);
+  if (at == std::string::npos) {
+    throwAt(vpHSlamException::parseError, path, 0, "missing or non-integer '" + key + "'");
   }
-  const std::size_t nodesBody = text.find(':', nodesAt) + 1, wordsBody = text.find(':', wordsAt) + 1;
-  const auto nodeMaps = flowMaps(text, nodesBody, wordsAt, path);
-  // After the words list, DBoW2 closes the vocabulary map: stop at the first line that is not part of the list.
-  const auto wordMaps = flowMaps(text, wordsBody, text.size(), path);
-  if (nodeMaps.empty() || wordMaps.empty()) {
-    throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary (no 'nodes' or 'words')");
-  }
+  const std::size_t end = text.find('\n', at);
+  const std::string line = trim(text.substr(at, end == std::string::npos ? std::string::npos : end - at));
+  std::vector<std::pair<std::string, std::string>> kv = {{key, trim(line.substr(key.size() + 1))}};
+  return intField(kv, key, path, lineAt(text, at));
+}
+
+//! The "nodes" list: each node's parent and descriptor into \e parts, its weight into \e nodeWeights (ids 1..n-1).
+void readNodes(const FlowMaps &nodeMaps, const std::string &path, OrbVocabulary::Parts &parts,
+               std::vector<double> &nodeWeights)
+{
   const std::size_t nodeCount = nodeMaps.size() + 1;
   parts.parents.assign(nodeCount, 0xffffffffu);
   parts.parents[0] = 0;
   parts.descriptors.assign(nodeCount, OrbDescriptor());
-  std::vector<double> nodeWeights(nodeCount, 0.0);
+  nodeWeights.assign(nodeCount, 0.0);
   for (const auto &entry : nodeMaps) {
     const auto fields = parseFlowMap(entry.second, path, entry.first);
     const int id = intField(fields, "nodeId", path, entry.first);
@@ -245,6 +225,11 @@ OrbVocabulary loadVocabularyDbow2Yaml(const std::string &path)
     parts.descriptors[static_cast<std::size_t>(id)] =
         descriptorFromText(*descriptor, path, entry.first, "node " + std::to_string(id));
   }
+}
+
+//! The "words" list: each word's node into \e parts (word ids 0..n-1, each once; nodes among the \e nodeCount).
+void readWords(const FlowMaps &wordMaps, std::size_t nodeCount, const std::string &path, OrbVocabulary::Parts &parts)
+{
   parts.wordNodes.assign(wordMaps.size(), 0);
   std::vector<bool> seen(wordMaps.size(), false);
   for (const auto &entry : wordMaps) {
@@ -261,6 +246,47 @@ OrbVocabulary loadVocabularyDbow2Yaml(const std::string &path)
     seen[static_cast<std::size_t>(word)] = true;
     parts.wordNodes[static_cast<std::size_t>(word)] = static_cast<std::uint32_t>(node);
   }
+}
+} // namespace
+
+OrbVocabulary loadVocabularyDbow2Yaml(const std::string &path)
+{
+  // DBoW2's YAML is read by a small parser of its own layout, not by OpenCV's YAML reader, which loops for ever on
+  // some malformed files (found by fuzz_vocabulary_yaml). gzip is inflated here first.
+  std::string text = readVocabularyFile(path);
+  if (text.size() >= 2 && static_cast<unsigned char>(text[0]) == 0x1f && static_cast<unsigned char>(text[1]) == 0x8b) {
+    text = gunzip(text, path);
+  }
+  requireNoNulByte(text, path);
+  // Scalars and the two lists: "key:" at the start of a (trimmed) line.
+  const std::size_t vocabularyAt = keyLine(text, "vocabulary", 0);
+  if (vocabularyAt == std::string::npos) {
+    throwAt(vpHSlamException::parseError, path, 0, "no 'vocabulary' map (not a DBoW2 YAML vocabulary)");
+  }
+  OrbVocabulary::Parts parts;
+  parts.branching = scalarField(text, "k", vocabularyAt, path);
+  parts.levels = scalarField(text, "L", vocabularyAt, path);
+  const int scoring = scalarField(text, "scoringType", vocabularyAt, path),
+            weighting = scalarField(text, "weightingType", vocabularyAt, path);
+  if (scoring > kDbow2MaxScoring || weighting > kDbow2MaxWeighting) {
+    throwAt(vpHSlamException::parseError, path, 0, "unknown scoring or weighting type");
+  }
+  parts.scoring = static_cast<VocabularyScoring>(scoring);
+  parts.weighting = static_cast<VocabularyWeighting>(weighting);
+  const std::size_t nodesAt = keyLine(text, "nodes", vocabularyAt), wordsAt = keyLine(text, "words", vocabularyAt);
+  if (nodesAt == std::string::npos || wordsAt == std::string::npos || wordsAt < nodesAt) {
+    throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary (no 'nodes' or 'words' list)");
+  }
+  const std::size_t nodesBody = text.find(':', nodesAt) + 1, wordsBody = text.find(':', wordsAt) + 1;
+  const FlowMaps nodeMaps = flowMaps(text, nodesBody, wordsAt, path);
+  // After the words list, DBoW2 closes the vocabulary map: stop at the first line that is not part of the list.
+  const FlowMaps wordMaps = flowMaps(text, wordsBody, text.size(), path);
+  if (nodeMaps.empty() || wordMaps.empty()) {
+    throwAt(vpHSlamException::parseError, path, 0, "empty vocabulary (no 'nodes' or 'words')");
+  }
+  std::vector<double> nodeWeights;
+  readNodes(nodeMaps, path, parts, nodeWeights);
+  readWords(wordMaps, nodeMaps.size() + 1, path, parts);
   parts.wordWeights.resize(parts.wordNodes.size());
   for (std::size_t w = 0; w < parts.wordNodes.size(); ++w) {
     parts.wordWeights[w] = nodeWeights[parts.wordNodes[w]];

@@ -144,6 +144,92 @@ double GlobalBundleAdjustment::rmsReprojection(int &count) const
   return count > 0 ? std::sqrt(sum / count) : 0.;
 }
 
+void GlobalBundleAdjustment::holdGauge()
+{
+  int fixed = 0;
+  for (const auto &k : m_keyframes) {
+    fixed += k.second.fixed ? 1 : 0;
+  }
+  for (auto it = m_keyframes.begin(); it != m_keyframes.end() && fixed < 2; ++it) {
+    if (!it->second.fixed) {
+      it->second.fixed = true;
+      ++fixed;
+    }
+  }
+}
+
+std::map<int, double *> GlobalBundleAdjustment::poseBlocks(std::vector<std::array<double, 7>> &poses) const
+{
+  std::map<int, double *> block;
+  poses.reserve(m_keyframes.size());
+  for (const auto &k : m_keyframes) {
+    poses.push_back(k.second.x);
+  }
+  size_t next = 0;
+  for (const auto &k : m_keyframes) {
+    block[k.first] = poses[next++].data();
+  }
+  return block;
+}
+
+void GlobalBundleAdjustment::addPointResiduals(ceres::Problem &problem, ceres::LossFunction *loss,
+                                               const std::map<int, double *> &block)
+{
+  for (Point &p : m_points) {
+    const Eigen::Vector3d ray = m_K.unproject(p.u, p.v, 1.);
+    for (const BundlePoint::Observation &o : p.observations) {
+      problem.AddResidualBlock(
+          new ceres::AutoDiffCostFunction<ReprojectionError, 2, 7, 7, 1>(new ReprojectionError(m_K, ray, o.u, o.v)),
+          loss, block.at(p.host), block.at(o.keyframeId), &p.idepth);
+    }
+    problem.SetParameterLowerBound(&p.idepth, 0, kMinIdepth);
+  }
+}
+
+std::vector<double *> GlobalBundleAdjustment::setPoseBlocks(ceres::Problem &problem, ceres::Manifold *manifold,
+                                                            const std::map<int, double *> &block) const
+{
+  std::vector<double *> used;
+  for (const auto &k : m_keyframes) {
+    double *x = block.at(k.first);
+    if (!problem.HasParameterBlock(x)) {
+      continue;
+    }
+    problem.SetManifold(x, manifold);
+    if (k.second.fixed) {
+      problem.SetParameterBlockConstant(x);
+    }
+    used.push_back(x);
+  }
+  return used;
+}
+
+bool GlobalBundleAdjustment::keepOrRestore(bool solverUsable, const std::vector<std::array<double, 7>> &poses,
+                                           const std::map<int, double *> &block,
+                                           const std::vector<double> &idepthBackup)
+{
+  bool usable = solverUsable;
+  for (const std::array<double, 7> &x : poses) {
+    for (double v : x) {
+      usable = usable && std::isfinite(v);
+    }
+  }
+  for (const Point &p : m_points) {
+    usable = usable && std::isfinite(p.idepth) && p.idepth > 0.;
+  }
+  if (usable) {
+    for (auto &k : m_keyframes) {
+      const double *x = block.at(k.first);
+      std::copy(x, x + 7, k.second.x.begin());
+    }
+  } else { // nothing changes
+    for (size_t i = 0; i < m_points.size(); ++i) {
+      m_points[i].idepth = idepthBackup[i];
+    }
+  }
+  return usable;
+}
+
 GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &options)
 {
   const auto t0 = std::chrono::steady_clock::now();
@@ -156,16 +242,7 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
     return out;
   }
   // Gauge: at least two held keyframes (see the file comment).
-  int fixed = 0;
-  for (const auto &k : m_keyframes) {
-    fixed += k.second.fixed ? 1 : 0;
-  }
-  for (auto it = m_keyframes.begin(); it != m_keyframes.end() && fixed < 2; ++it) {
-    if (!it->second.fixed) {
-      it->second.fixed = true;
-      ++fixed;
-    }
-  }
+  holdGauge();
 
   ceres::Problem::Options problemOptions;
   problemOptions.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
@@ -178,35 +255,13 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   // before, so the same problem summed in another order ended 1e-6 apart and diverged later (a slam run's output
   // changed with the dataset program's progress line).
   std::vector<std::array<double, 7>> poses;
-  std::map<int, double *> block;
-  poses.reserve(m_keyframes.size());
-  for (const auto &k : m_keyframes) {
-    poses.push_back(k.second.x);
-  }
-  size_t next = 0;
-  for (const auto &k : m_keyframes) {
-    block[k.first] = poses[next++].data();
-  }
+  const std::map<int, double *> block = poseBlocks(poses);
+  addPointResiduals(problem, &loss, block);
   auto *ordering = new ceres::ParameterBlockOrdering; // owned by the solver options
   for (Point &p : m_points) {
-    const Eigen::Vector3d ray = m_K.unproject(p.u, p.v, 1.);
-    for (const BundlePoint::Observation &o : p.observations) {
-      problem.AddResidualBlock(
-          new ceres::AutoDiffCostFunction<ReprojectionError, 2, 7, 7, 1>(new ReprojectionError(m_K, ray, o.u, o.v)),
-          &loss, block.at(p.host), block.at(o.keyframeId), &p.idepth);
-    }
-    problem.SetParameterLowerBound(&p.idepth, 0, kMinIdepth);
     ordering->AddElementToGroup(&p.idepth, 0);
   }
-  for (const auto &k : m_keyframes) {
-    double *x = block.at(k.first);
-    if (!problem.HasParameterBlock(x)) {
-      continue;
-    }
-    problem.SetManifold(x, &poseManifold);
-    if (k.second.fixed) {
-      problem.SetParameterBlockConstant(x);
-    }
+  for (double *x : setPoseBlocks(problem, &poseManifold, block)) {
     ordering->AddElementToGroup(x, 1);
   }
   ceres::Solver::Options solverOptions = loopSolverOptions(options.maxIterations, ceres::SPARSE_SCHUR);
@@ -223,26 +278,9 @@ GlobalBundleSummary GlobalBundleAdjustment::optimize(const GlobalBundleOptions &
   }
   ceres::Solver::Summary summary;
   ceres::Solve(solverOptions, &problem, &summary);
-  out.usable = summary.IsSolutionUsable() && summary.termination_type != ceres::USER_FAILURE &&
-               !(options.cancel && options.cancel->load());
-  for (const std::array<double, 7> &x : poses) {
-    for (double v : x) {
-      out.usable = out.usable && std::isfinite(v);
-    }
-  }
-  for (const Point &p : m_points) {
-    out.usable = out.usable && std::isfinite(p.idepth) && p.idepth > 0.;
-  }
-  if (out.usable) {
-    for (auto &k : m_keyframes) {
-      const double *x = block.at(k.first);
-      std::copy(x, x + 7, k.second.x.begin());
-    }
-  } else { // nothing changes
-    for (size_t i = 0; i < m_points.size(); ++i) {
-      m_points[i].idepth = idepthBackup[i];
-    }
-  }
+  out.usable = keepOrRestore(summary.IsSolutionUsable() && summary.termination_type != ceres::USER_FAILURE &&
+                                 !(options.cancel && options.cancel->load()),
+                             poses, block, idepthBackup);
   out.iterations = static_cast<int>(summary.iterations.size());
   int after = 0;
   out.rmsAfterPx = rmsReprojection(after);

@@ -36,6 +36,13 @@
 #include <map>
 #include <vector>
 
+namespace ceres
+{
+class LossFunction;
+class Manifold;
+class Problem;
+} // namespace ceres
+
 namespace hslam
 {
 //! A point as the adjustment sees it.
@@ -107,6 +114,18 @@ private:
     std::vector<BundlePoint::Observation> observations;
   };
   double rmsReprojection(int &count) const;
+  //! Holds keyframes, first ids first, until at least two are held (the gauge of a monocular map).
+  void holdGauge();
+  //! The poses copied into \e poses (keyframe-id order), and each keyframe's block in it.
+  std::map<int, double *> poseBlocks(std::vector<std::array<double, 7>> &poses) const;
+  //! One reprojection residual per observation (robust \e loss); inverse depths bounded below.
+  void addPointResiduals(ceres::Problem &problem, ceres::LossFunction *loss, const std::map<int, double *> &block);
+  //! Manifold of the pose blocks that have a residual, held ones constant; those blocks, in keyframe-id order.
+  std::vector<double *> setPoseBlocks(ceres::Problem &problem, ceres::Manifold *manifold,
+                                      const std::map<int, double *> &block) const;
+  //! A usable, finite solution is kept (poses copied back) and true; otherwise the inverse depths are restored.
+  bool keepOrRestore(bool solverUsable, const std::vector<std::array<double, 7>> &poses,
+                     const std::map<int, double *> &block, const std::vector<double> &idepthBackup);
 
   PinholeIntrinsics m_K;
   std::map<int, Pose> m_keyframes;

@@ -152,11 +152,14 @@ std::unordered_map<KeyframeDatabase::KeyframeId, int> KeyframeDatabase::sharedWo
   return common;
 }
 
-std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector &bow, const Query &query) const
+namespace
 {
-  std::shared_lock<std::shared_mutex> lock(m_mutex);
-  // 1. Keyframes sharing words, with the count of shared words.
-  std::unordered_map<KeyframeId, int> common = sharedWordCounts(bow);
+using Candidate = KeyframeDatabase::Candidate;
+using KeyframeId = KeyframeDatabase::KeyframeId;
+
+//! Drops the keyframes the query excludes from \e common; the largest count of shared words left.
+int dropExcluded(std::unordered_map<KeyframeId, int> &common, const KeyframeDatabase::Query &query)
+{
   int maxCommon = 0;
   for (auto it = common.begin(); it != common.end();) {
     if (query.excluded && query.excluded(it->first)) {
@@ -166,29 +169,14 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
       ++it;
     }
   }
-  if (common.empty()) {
-    return {};
-  }
+  return maxCommon;
+}
 
-  // 2. Score the keyframes sharing enough words.
-  const double minCommon = m_options.minCommonWordsRatio * maxCommon;
-  std::unordered_map<KeyframeId, Candidate> scored;
-  for (const auto &kc : common) {
-    if (kc.second < minCommon) {
-      continue;
-    }
-    Candidate c;
-    c.id = kc.first;
-    c.commonWords = kc.second;
-    c.score = OrbVocabulary::score(bow, m_vectors.at(kc.first));
-    c.normalizedScore = query.expectedScore > 0.0 ? c.score / query.expectedScore : c.score;
-    c.groupScore = c.score;
-    if (c.score >= query.minScore && c.normalizedScore >= query.minNormalizedScore) {
-      scored.emplace(c.id, c);
-    }
-  }
-
-  // 3. Group by co-visibility: the group of a candidate is itself and its best neighbours that are candidates.
+//! Groups by co-visibility: the group of a candidate is itself and its best \e groupNeighbours neighbours that are
+//! candidates, represented by its best-scoring member and scored by the sum.
+std::vector<Candidate> groupByCovisibility(const std::unordered_map<KeyframeId, Candidate> &scored,
+                                           const KeyframeDatabase::Query &query, int groupNeighbours)
+{
   std::vector<Candidate> groups;
   groups.reserve(scored.size());
   for (const auto &entry : scored) {
@@ -196,7 +184,7 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     double groupScore = entry.second.score;
     if (query.covisible) {
       const std::vector<KeyframeId> neighbours = query.covisible(entry.first);
-      const std::size_t count = std::min(neighbours.size(), static_cast<std::size_t>(m_options.groupNeighbours));
+      const std::size_t count = std::min(neighbours.size(), static_cast<std::size_t>(groupNeighbours));
       for (std::size_t i = 0; i < count; ++i) {
         const auto it = scored.find(neighbours[i]);
         if (it == scored.end() || it->first == entry.first) {
@@ -211,13 +199,18 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     best.groupScore = groupScore;
     groups.push_back(best);
   }
+  return groups;
+}
 
-  // 4. Keep the groups close to the best one; one entry per representative keyframe, best first.
+//! The groups within \e retainRatio of the best one, one entry per representative keyframe, best first.
+std::vector<Candidate> retainBestGroups(std::vector<Candidate> &groups, const KeyframeDatabase::Query &query,
+                                        double retainRatio)
+{
   double bestGroup = 0.0;
   for (const Candidate &g : groups) {
     bestGroup = std::max(bestGroup, g.groupScore);
   }
-  const double retain = m_options.groupRetainRatio * bestGroup;
+  const double retain = retainRatio * bestGroup;
   std::sort(groups.begin(), groups.end(), [](const Candidate &a, const Candidate &b) {
     if (a.groupScore != b.groupScore) {
       return a.groupScore > b.groupScore;
@@ -241,6 +234,40 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     }
   }
   return result;
+}
+} // namespace
+
+std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector &bow, const Query &query) const
+{
+  std::shared_lock<std::shared_mutex> lock(m_mutex);
+  // 1. Keyframes sharing words, with the count of shared words.
+  std::unordered_map<KeyframeId, int> common = sharedWordCounts(bow);
+  const int maxCommon = dropExcluded(common, query);
+  if (common.empty()) {
+    return {};
+  }
+
+  // 2. Score the keyframes sharing enough words.
+  const double minCommon = m_options.minCommonWordsRatio * maxCommon;
+  std::unordered_map<KeyframeId, Candidate> scored;
+  for (const auto &kc : common) {
+    if (kc.second < minCommon) {
+      continue;
+    }
+    Candidate c;
+    c.id = kc.first;
+    c.commonWords = kc.second;
+    c.score = OrbVocabulary::score(bow, m_vectors.at(kc.first));
+    c.normalizedScore = query.expectedScore > 0.0 ? c.score / query.expectedScore : c.score;
+    c.groupScore = c.score;
+    if (c.score >= query.minScore && c.normalizedScore >= query.minNormalizedScore) {
+      scored.emplace(c.id, c);
+    }
+  }
+
+  // 3. Group by co-visibility; 4. keep the groups close to the best one.
+  std::vector<Candidate> groups = groupByCovisibility(scored, query, m_options.groupNeighbours);
+  return retainBestGroups(groups, query, m_options.groupRetainRatio);
 }
 
 double KeyframeDatabase::memoryBytes() const

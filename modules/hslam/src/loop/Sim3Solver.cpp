@@ -163,16 +163,13 @@ bool refineSim3(const std::vector<Sim3Correspondence> &matches, const PinholeInt
   return true;
 }
 
-Sim3Estimate estimateSim3Ransac(const std::vector<Sim3Correspondence> &matches, const PinholeIntrinsics &K1,
-                                const PinholeIntrinsics &K2, const Sim3RansacOptions &options)
+namespace
 {
-  Sim3Estimate best;
-  best.inliers.assign(matches.size(), false);
+//! RANSAC over minimal samples of three matches (hornSim3), adaptive stopping: the best hypothesis into \e best.
+void sampleHypotheses(const std::vector<Sim3Correspondence> &matches, const PinholeIntrinsics &K1,
+                      const PinholeIntrinsics &K2, const Sim3RansacOptions &options, double maxSq, Sim3Estimate &best)
+{
   const int n = static_cast<int>(matches.size());
-  if (n < std::max(3, options.minInliers)) {
-    return best;
-  }
-  const double maxSq = options.maxReprojectionPx * options.maxReprojectionPx;
   std::mt19937 rng(options.seed);
   std::uniform_int_distribution<int> pick(0, n - 1);
   int required = options.maxIterations;
@@ -213,20 +210,22 @@ Sim3Estimate estimateSim3Ransac(const std::vector<Sim3Correspondence> &matches, 
       }
     }
   }
-  if (best.inlierCount < std::max(3, options.minInliers)) {
-    best.success = false;
-    return best;
-  }
-  // All inliers: closed form, then the non-linear refinement, each kept only if it does not lose inliers.
+}
+
+//! All inliers of \e best: closed form, then the non-linear refinement, each kept only if it does not lose inliers.
+void polishOnInliers(const std::vector<Sim3Correspondence> &matches, const PinholeIntrinsics &K1,
+                     const PinholeIntrinsics &K2, const Sim3RansacOptions &options, double maxSq, Sim3Estimate &best)
+{
   std::vector<Eigen::Vector3d> A, B;
   std::vector<Sim3Correspondence> in;
-  for (int i = 0; i < n; ++i) {
-    if (best.inliers[static_cast<size_t>(i)]) {
-      A.push_back(matches[static_cast<size_t>(i)].X1);
-      B.push_back(matches[static_cast<size_t>(i)].X2);
-      in.push_back(matches[static_cast<size_t>(i)]);
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (best.inliers[i]) {
+      A.push_back(matches[i].X1);
+      B.push_back(matches[i].X2);
+      in.push_back(matches[i]);
     }
   }
+  std::vector<bool> inliers;
   try {
     const Sim3d S = hornSim3(A, B);
     const int count = countInliers(matches, S, K1, K2, maxSq, inliers);
@@ -248,16 +247,42 @@ Sim3Estimate estimateSim3Ransac(const std::vector<Sim3Correspondence> &matches, 
       }
     }
   }
-  const Sim3d S12 = best.S21.inverse();
+}
+
+//! RMS of the two-way reprojection errors of the inliers of \e estimate, pixels.
+double rmsInlierReprojection(const std::vector<Sim3Correspondence> &matches, const Sim3Estimate &estimate,
+                             const PinholeIntrinsics &K1, const PinholeIntrinsics &K2)
+{
+  const Sim3d S12 = estimate.S21.inverse();
   double sum = 0.;
-  for (int i = 0; i < n; ++i) {
-    if (best.inliers[static_cast<size_t>(i)]) {
+  for (size_t i = 0; i < matches.size(); ++i) {
+    if (estimate.inliers[i]) {
       double e2, e1;
-      reprojectionErrors(matches[static_cast<size_t>(i)], best.S21, S12, K1, K2, e2, e1);
+      reprojectionErrors(matches[i], estimate.S21, S12, K1, K2, e2, e1);
       sum += e1 + e2;
     }
   }
-  best.rmsReprojectionPx = best.inlierCount > 0 ? std::sqrt(sum / (2. * best.inlierCount)) : 0.;
+  return estimate.inlierCount > 0 ? std::sqrt(sum / (2. * estimate.inlierCount)) : 0.;
+}
+} // namespace
+
+Sim3Estimate estimateSim3Ransac(const std::vector<Sim3Correspondence> &matches, const PinholeIntrinsics &K1,
+                                const PinholeIntrinsics &K2, const Sim3RansacOptions &options)
+{
+  Sim3Estimate best;
+  best.inliers.assign(matches.size(), false);
+  const int n = static_cast<int>(matches.size());
+  if (n < std::max(3, options.minInliers)) {
+    return best;
+  }
+  const double maxSq = options.maxReprojectionPx * options.maxReprojectionPx;
+  sampleHypotheses(matches, K1, K2, options, maxSq, best);
+  if (best.inlierCount < std::max(3, options.minInliers)) {
+    best.success = false;
+    return best;
+  }
+  polishOnInliers(matches, K1, K2, options, maxSq, best);
+  best.rmsReprojectionPx = rmsInlierReprojection(matches, best, K1, K2);
   best.success = best.inlierCount >= options.minInliers;
   return best;
 }

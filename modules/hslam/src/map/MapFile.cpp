@@ -191,7 +191,10 @@ MapSnapshot loadMapFile(const std::string &path)
   return parseMapFile(readBinaryFile(path, "map file"), path);
 }
 
-MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
+namespace
+{
+//! Checks the magic, the format version, the descriptor size and the checksum of a whole map file; its version.
+std::uint32_t checkHeaderAndChecksum(const std::string &bytes, const std::string &path)
 {
   if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
     throwAt(vpHSlamException::parseError, path, 0, "not an H-SLAM map file (wrong magic)");
@@ -220,61 +223,64 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
   if (hashBytes(bytes.data(), payload) != loadU64(reinterpret_cast<const std::uint8_t *>(bytes.data()) + payload)) {
     throwAt(vpHSlamException::parseError, path, 0, "corrupt or truncated map file: checksum mismatch");
   }
-  const std::string body = bytes.substr(0, payload);
-  ByteReader r(body, path);
-  r.raw(magic, sizeof(magic), "the header");
-  r.u32("the header");
-  r.u32("the header");
+  return version;
+}
 
-  MapSnapshot map;
-  map.camera.width = r.i32("the camera");
-  map.camera.height = r.i32("the camera");
-  map.camera.fx = r.f64("the camera");
-  map.camera.fy = r.f64("the camera");
-  map.camera.cx = r.f64("the camera");
-  map.camera.cy = r.f64("the camera");
-  if (map.camera.width <= 0 || map.camera.height <= 0 || !(map.camera.fx > 0.) || !(map.camera.fy > 0.) ||
-      !std::isfinite(map.camera.fx) || !std::isfinite(map.camera.fy) || !std::isfinite(map.camera.cx) ||
-      !std::isfinite(map.camera.cy)) {
+//! The camera record: image size and pinhole intrinsics, checked.
+MapCamera readCamera(ByteReader &r, const std::string &path)
+{
+  MapCamera camera;
+  camera.width = r.i32("the camera");
+  camera.height = r.i32("the camera");
+  camera.fx = r.f64("the camera");
+  camera.fy = r.f64("the camera");
+  camera.cx = r.f64("the camera");
+  camera.cy = r.f64("the camera");
+  if (camera.width <= 0 || camera.height <= 0 || !(camera.fx > 0.) || !(camera.fy > 0.) || !std::isfinite(camera.fx) ||
+      !std::isfinite(camera.fy) || !std::isfinite(camera.cx) || !std::isfinite(camera.cy)) {
     corrupt(path, "invalid camera (size or focal length)");
   }
-  map.vocabularyId = r.u64("the header");
+  return camera;
+}
 
-  const std::uint32_t keyframes = r.u32("the keyframe count");
-  r.requireRecords(keyframes, kKeyframeRecordBytes, "keyframes");
-  map.keyframes.resize(keyframes);
-  std::set<int> ids;
-  for (GlobalKeyframe &kf : map.keyframes) {
-    kf.id = r.i32("a keyframe");
-    kf.frameId = r.i32("a keyframe");
-    kf.segment = r.i32("a keyframe");
-    if (kf.id < 0 || kf.id > kMaxId || !ids.insert(kf.id).second) {
-      corrupt(path, "keyframe id " + std::to_string(kf.id) + " out of range or repeated");
-    }
-    if (kf.segment < 0 || kf.segment > kMaxId) {
-      corrupt(path, "keyframe segment " + std::to_string(kf.segment) + " out of range");
-    }
-    kf.timestamp = finite(r.f64("a keyframe"), path, "keyframe timestamp");
-    kf.exposure = finite(r.f64("a keyframe"), path, "keyframe exposure");
-    if (!(kf.exposure > 0.)) {
-      corrupt(path, "keyframe with a non-positive exposure");
-    }
-    kf.cMw = readPose(r, path, "a keyframe pose");
-    kf.affine.a = finite(r.f64("a keyframe"), path, "affine brightness");
-    kf.affine.b = finite(r.f64("a keyframe"), path, "affine brightness");
-    const std::uint8_t culled = r.u8("a keyframe");
-    if (culled > 1) {
-      corrupt(path, "keyframe culled flag is neither 0 nor 1");
-    }
-    kf.culled = culled == 1;
-    const std::uint32_t points = r.u32("a point count");
-    r.requireRecords(points, kPointRecordBytes, "points");
-    kf.points.resize(points);
-    for (GlobalPoint &p : kf.points) {
-      readPoint(r, map.camera, version, path, p);
-    }
+//! One keyframe record and its points; its id joins \e ids (an id already there is an error).
+void readKeyframe(ByteReader &r, const MapCamera &camera, std::uint32_t version, const std::string &path,
+                  std::set<int> &ids, GlobalKeyframe &kf)
+{
+  kf.id = r.i32("a keyframe");
+  kf.frameId = r.i32("a keyframe");
+  kf.segment = r.i32("a keyframe");
+  if (kf.id < 0 || kf.id > kMaxId || !ids.insert(kf.id).second) {
+    corrupt(path, "keyframe id " + std::to_string(kf.id) + " out of range or repeated");
   }
-  for (const GlobalKeyframe &kf : map.keyframes) {
+  if (kf.segment < 0 || kf.segment > kMaxId) {
+    corrupt(path, "keyframe segment " + std::to_string(kf.segment) + " out of range");
+  }
+  kf.timestamp = finite(r.f64("a keyframe"), path, "keyframe timestamp");
+  kf.exposure = finite(r.f64("a keyframe"), path, "keyframe exposure");
+  if (!(kf.exposure > 0.)) {
+    corrupt(path, "keyframe with a non-positive exposure");
+  }
+  kf.cMw = readPose(r, path, "a keyframe pose");
+  kf.affine.a = finite(r.f64("a keyframe"), path, "affine brightness");
+  kf.affine.b = finite(r.f64("a keyframe"), path, "affine brightness");
+  const std::uint8_t culled = r.u8("a keyframe");
+  if (culled > 1) {
+    corrupt(path, "keyframe culled flag is neither 0 nor 1");
+  }
+  kf.culled = culled == 1;
+  const std::uint32_t points = r.u32("a point count");
+  r.requireRecords(points, kPointRecordBytes, "points");
+  kf.points.resize(points);
+  for (GlobalPoint &p : kf.points) {
+    readPoint(r, camera, version, path, p);
+  }
+}
+
+//! Every point's observers are sorted ids of the file's keyframes (\e ids).
+void checkObservers(const std::vector<GlobalKeyframe> &keyframes, const std::set<int> &ids, const std::string &path)
+{
+  for (const GlobalKeyframe &kf : keyframes) {
     for (const GlobalPoint &p : kf.points) {
       for (size_t i = 0; i < p.observers.size(); ++i) {
         if (!ids.count(p.observers[i]) || (i > 0 && p.observers[i] <= p.observers[i - 1])) {
@@ -283,28 +289,59 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
       }
     }
   }
+}
+
+//! One pose-pose edge record, between two different keyframes of the file (\e ids).
+void readEdge(ByteReader &r, const std::set<int> &ids, const std::string &path, PosePoseEdge &e)
+{
+  e.from = r.i32("an edge");
+  e.to = r.i32("an edge");
+  if (!ids.count(e.from) || !ids.count(e.to) || e.from == e.to) {
+    corrupt(path, "pose-pose edge between keyframes " + std::to_string(e.from) + " and " + std::to_string(e.to) +
+                      " that the file does not hold");
+  }
+  e.toMfrom = readPose(r, path, "an edge's relative pose");
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j < 6; ++j) {
+      e.information(i, j) = finite(r.f64("an edge's information"), path, "edge information");
+    }
+  }
+  const std::uint8_t consecutive = r.u8("an edge");
+  if (consecutive > 1) {
+    corrupt(path, "edge consecutive flag is neither 0 nor 1");
+  }
+  e.consecutive = consecutive == 1;
+}
+} // namespace
+
+MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
+{
+  const std::uint32_t version = checkHeaderAndChecksum(bytes, path);
+  const std::string body = bytes.substr(0, bytes.size() - kChecksumBytes);
+  ByteReader r(body, path);
+  char magic[sizeof(kMagic)];
+  r.raw(magic, sizeof(magic), "the header");
+  r.u32("the header");
+  r.u32("the header");
+
+  MapSnapshot map;
+  map.camera = readCamera(r, path);
+  map.vocabularyId = r.u64("the header");
+
+  const std::uint32_t keyframes = r.u32("the keyframe count");
+  r.requireRecords(keyframes, kKeyframeRecordBytes, "keyframes");
+  map.keyframes.resize(keyframes);
+  std::set<int> ids;
+  for (GlobalKeyframe &kf : map.keyframes) {
+    readKeyframe(r, map.camera, version, path, ids, kf);
+  }
+  checkObservers(map.keyframes, ids, path);
 
   const std::uint32_t edges = r.u32("the edge count");
   r.requireRecords(edges, kEdgeRecordBytes, "pose-pose edges");
   map.edges.resize(edges);
   for (PosePoseEdge &e : map.edges) {
-    e.from = r.i32("an edge");
-    e.to = r.i32("an edge");
-    if (!ids.count(e.from) || !ids.count(e.to) || e.from == e.to) {
-      corrupt(path, "pose-pose edge between keyframes " + std::to_string(e.from) + " and " + std::to_string(e.to) +
-                        " that the file does not hold");
-    }
-    e.toMfrom = readPose(r, path, "an edge's relative pose");
-    for (int i = 0; i < 6; ++i) {
-      for (int j = 0; j < 6; ++j) {
-        e.information(i, j) = finite(r.f64("an edge's information"), path, "edge information");
-      }
-    }
-    const std::uint8_t consecutive = r.u8("an edge");
-    if (consecutive > 1) {
-      corrupt(path, "edge consecutive flag is neither 0 nor 1");
-    }
-    e.consecutive = consecutive == 1;
+    readEdge(r, ids, path, e);
   }
   if (r.remaining() != 0) {
     corrupt(path, std::to_string(r.remaining()) + " unexpected bytes before the checksum");

@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -321,58 +322,70 @@ float ImmaturePointTracer::projectedIntervalLength(const ImmaturePoint &pt, cons
   return static_cast<float>(std::sqrt(du * du + dv * dv));
 }
 
-TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &context, TraceResult *result) const
+//! How a trace ends: the status and the target pixel and interval length it reports (see TraceResult).
+struct ImmaturePointTracer::TraceEnd {
+  TraceStatus status;
+  float u, v, pixelInterval;
+
+  //! The point left the target (or never fits in it): no pixel, no interval.
+  static TraceEnd outOfBounds() { return TraceEnd{TraceStatus::outOfBounds, -1.f, -1.f, 0.f}; }
+};
+
+//! The point's interval projected onto the target's epipolar line: where the search starts, where it goes, how far.
+struct ImmaturePointTracer::EpipolarSegment {
+  Eigen::Vector3f pr; //!< K R K^-1 (u, v, 1): the host pixel at zero inverse depth, target homogeneous coordinates
+  float uMin, vMin;   //!< projection of idepthMin, pixels
+  float dirU, dirV;   //!< unit direction of growing inverse depth
+  float dist;         //!< length of the segment to search, pixels
+  bool bounded;       //!< idepthMax is finite
+};
+
+//! The best match along the line: discrete search, then refined by Gauss-Newton.
+struct ImmaturePointTracer::LineMatch {
+  float u, v;         //!< target pixel
+  float energy;       //!< pattern energy there
+  float stepU, stepV; //!< one search step along the line, pixels
+};
+
+std::optional<ImmaturePointTracer::TraceEnd> ImmaturePointTracer::projectInterval(const ImmaturePoint &pt,
+                                                                                  const TraceContext &context,
+                                                                                  EpipolarSegment &segment) const
 {
-  TraceResult local;
-  TraceResult &out = result != nullptr ? *result : local;
-  out = TraceResult();
-  const auto finish = [&pt, &out](TraceStatus status, float u, float v, float pixelInterval) {
-    pt.lastStatus = status;
-    out.status = status;
-    out.u = u;
-    out.v = v;
-    out.pixelInterval = pixelInterval;
-    return status;
-  };
-  // An out-of-bounds point stays so: it has left the field of view for good (DSO).
-  if (pt.lastStatus == TraceStatus::outOfBounds) {
-    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
-  }
   const PyramidLevel &target = *context.targetLevel;
   const Eigen::Vector3f &Kt = context.Kt;
-
-  // ---- Project both ends of the interval onto the target's epipolar line.
   const Eigen::Vector3f pr = context.KRKi * Eigen::Vector3f(pt.u, pt.v, 1.f);
+  segment.pr = pr;
   const Eigen::Vector3f ptpMin = pr + Kt * pt.idepthMin;
   if (!(ptpMin.z() > 0.f)) {
-    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    return TraceEnd::outOfBounds();
   }
   const float uMin = ptpMin.x() / ptpMin.z();
   const float vMin = ptpMin.y() / ptpMin.z();
   if (!target.isInside(uMin, vMin, kTraceBorder)) {
-    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    return TraceEnd::outOfBounds();
   }
+  segment.uMin = uMin;
+  segment.vMin = vMin;
 
-  const bool boundedInterval = std::isfinite(pt.idepthMax);
-  float dist = 0.f; // length of the segment to search, pixels
-  float dirU = 0.f, dirV = 0.f;
-  if (boundedInterval) {
+  segment.bounded = std::isfinite(pt.idepthMax);
+  if (segment.bounded) {
     const Eigen::Vector3f ptpMax = pr + Kt * pt.idepthMax;
     if (!(ptpMax.z() > 0.f)) {
-      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+      return TraceEnd::outOfBounds();
     }
     const float uMax = ptpMax.x() / ptpMax.z();
     const float vMax = ptpMax.y() / ptpMax.z();
     if (!target.isInside(uMax, vMax, kTraceBorder)) {
-      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+      return TraceEnd::outOfBounds();
     }
-    dist = std::hypot(uMax - uMin, vMax - vMin);
+    const float dist = std::hypot(uMax - uMin, vMax - vMin);
     // Already certain to within the slack: nothing to gain from a search (DSO "skip").
     if (dist < m_slackInterval) {
-      return finish(TraceStatus::skipped, 0.5f * (uMin + uMax), 0.5f * (vMin + vMax), dist);
+      return TraceEnd{TraceStatus::skipped, 0.5f * (uMin + uMax), 0.5f * (vMin + vMax), dist};
     }
-    dirU = (uMax - uMin) / dist;
-    dirV = (vMax - vMin) / dist;
+    segment.dist = dist;
+    segment.dirU = (uMax - uMin) / dist;
+    segment.dirV = (vMax - vMin) / dist;
   } else {
     // Direction of growing inverse depth: derivative of the projection, (Kt_xy - p_xy Kt_z) / z (exact tangent).
     const float tu = Kt.x() - uMin * Kt.z();
@@ -380,22 +393,28 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
     const float norm = std::hypot(tu, tv);
     if (!(norm > kMinRelativeDirectionNorm * Kt.norm()) || !(norm > 0.f)) {
       // No parallax direction (pure rotation or pixel at the epipole): keep the interval.
-      return finish(TraceStatus::skipped, uMin, vMin, 0.f);
+      return TraceEnd{TraceStatus::skipped, uMin, vMin, 0.f};
     }
-    dirU = tu / norm;
-    dirV = tv / norm;
-    dist = context.maxPixelSearch;
-    if (!target.isInside(uMin + dist * dirU, vMin + dist * dirV, kTraceBorder)) {
-      return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    segment.dirU = tu / norm;
+    segment.dirV = tv / norm;
+    segment.dist = context.maxPixelSearch;
+    if (!target.isInside(uMin + segment.dist * segment.dirU, vMin + segment.dist * segment.dirV, kTraceBorder)) {
+      return TraceEnd::outOfBounds();
     }
   }
 
   // Large depth changes distort the patch too much for the unwarped pattern comparison (DSO).
   if (!(pt.idepthMin < 0.f || (ptpMin.z() > kMinScaleChange && ptpMin.z() < kMaxScaleChange))) {
-    return finish(TraceStatus::outOfBounds, -1.f, -1.f, 0.f);
+    return TraceEnd::outOfBounds();
   }
+  return std::nullopt;
+}
 
-  // ---- Expected pixel error: small when the host gradients lie along the epipolar line (DSO errorInPixel).
+std::optional<ImmaturePointTracer::TraceEnd> ImmaturePointTracer::expectedPixelError(const ImmaturePoint &pt,
+                                                                                     const TraceContext &context,
+                                                                                     const EpipolarSegment &segment,
+                                                                                     float &errorInPixel) const
+{
   const PyramidLevel &hostLevel = *context.hostLevel;
   Eigen::Matrix2f gradH = Eigen::Matrix2f::Zero();
   for (int k = 0; k < kPatternSize; ++k) {
@@ -403,35 +422,63 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
         hostLevel.interpolate(pt.u + static_cast<float>(kPattern[k][0]), pt.v + static_cast<float>(kPattern[k][1]));
     gradH += c.tail<2>() * c.tail<2>().transpose();
   }
-  const Eigen::Vector2f along(dirU, dirV);
-  const Eigen::Vector2f across(dirV, -dirU);
+  const Eigen::Vector2f along(segment.dirU, segment.dirV);
+  const Eigen::Vector2f across(segment.dirV, -segment.dirU);
   const float energyAlong = along.dot(gradH * along);
   const float energyAcross = across.dot(gradH * across);
-  float errorInPixel = kErrorInPixelBase + kErrorInPixelBase * (energyAlong + energyAcross) / energyAlong;
+  errorInPixel = kErrorInPixelBase + kErrorInPixelBase * (energyAlong + energyAcross) / energyAlong;
   if (!std::isfinite(errorInPixel)) {
     errorInPixel = std::numeric_limits<float>::infinity();
   }
-  if (boundedInterval && errorInPixel * m_minImprovementFactor > dist) {
-    const float uEnd = uMin + dist * dirU, vEnd = vMin + dist * dirV;
-    return finish(TraceStatus::badCondition, 0.5f * (uMin + uEnd), 0.5f * (vMin + vEnd), dist);
+  if (segment.bounded && errorInPixel * m_minImprovementFactor > segment.dist) {
+    const float uEnd = segment.uMin + segment.dist * segment.dirU, vEnd = segment.vMin + segment.dist * segment.dirV;
+    return TraceEnd{TraceStatus::badCondition, 0.5f * (segment.uMin + uEnd), 0.5f * (segment.vMin + vEnd),
+                    segment.dist};
   }
   errorInPixel = std::min(errorInPixel, kMaxErrorInPixel);
+  return std::nullopt;
+}
 
-  // ---- Discrete search along the segment, unweighted Huber SSD of the pattern (DSO).
-  dist = std::min(dist, context.maxPixelSearch);
-  const float stepU = m_stepSize * dirU;
-  const float stepV = m_stepSize * dirV;
-  int numSteps = static_cast<int>(kStepCountRounding + dist / m_stepSize);
+namespace
+{
+/*!
+  Match quality: the best energy away from the best match over the best energy (DSO: distinctiveness of the match).
+  Refreshed when it got worse or the search was long.
+*/
+void updateQuality(ImmaturePoint &pt, const std::array<float, kMaxTraceSteps> &errors, int numSteps, int bestIndex,
+                   float bestEnergy)
+{
+  float secondBest = kNoEnergy;
+  for (int i = 0; i < numSteps; ++i) {
+    if ((i < bestIndex - kSecondBestExclusionRadius || i > bestIndex + kSecondBestExclusionRadius) &&
+        errors[static_cast<size_t>(i)] < secondBest) {
+      secondBest = errors[static_cast<size_t>(i)];
+    }
+  }
+  const float newQuality = secondBest / std::max(bestEnergy, kMinQualityDenominator);
+  if (newQuality < pt.quality || numSteps > kQualityRefreshSteps) {
+    pt.quality = newQuality;
+  }
+}
+} // namespace
+
+ImmaturePointTracer::LineMatch ImmaturePointTracer::searchAlongLine(ImmaturePoint &pt, const TraceContext &context,
+                                                                    const EpipolarSegment &segment,
+                                                                    const std::array<float, kPatternSize> &reference,
+                                                                    int &numSteps) const
+{
+  const PyramidLevel &target = *context.targetLevel;
+  const float dist = std::min(segment.dist, context.maxPixelSearch);
+  LineMatch best;
+  best.stepU = m_stepSize * segment.dirU;
+  best.stepV = m_stepSize * segment.dirV;
+  const float stepU = best.stepU, stepV = best.stepV;
+  numSteps = static_cast<int>(kStepCountRounding + dist / m_stepSize);
   numSteps = std::min(numSteps, kMaxTraceSteps - 1);
   // Deterministic sub-step start offset, so consecutive traces do not sample the same positions (DSO).
-  const float startShift = uMin * kStartJitterScale - std::floor(uMin * kStartJitterScale);
-  float ptx = uMin - startShift * stepU;
-  float pty = vMin - startShift * stepV;
-
-  std::array<float, kPatternSize> reference;
-  for (int k = 0; k < kPatternSize; ++k) {
-    reference[static_cast<size_t>(k)] = context.aji * pt.patch[static_cast<size_t>(k)] + context.bji;
-  }
+  const float startShift = segment.uMin * kStartJitterScale - std::floor(segment.uMin * kStartJitterScale);
+  float ptx = segment.uMin - startShift * stepU;
+  float pty = segment.vMin - startShift * stepV;
   const std::array<Eigen::Vector2f, kPatternSize> &offsets = context.rotatedPattern;
 
   // Most segments lie well inside the image: one box test for the whole segment then spares the per-pixel test
@@ -442,7 +489,9 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
                                            ptx + static_cast<float>(numSteps - 1) * stepU,
                                            pty + static_cast<float>(numSteps - 1) * stepV);
   std::array<float, kMaxTraceSteps> errors;
-  float bestU = 0.f, bestV = 0.f, bestEnergy = kNoEnergy;
+  best.u = 0.f;
+  best.v = 0.f;
+  best.energy = kNoEnergy;
   int bestIndex = -1;
 #ifdef __SSE2__
   float offX[kPatternSize], offY[kPatternSize];
@@ -460,31 +509,26 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
     const float energy = patternEnergy(target, offsets, reference, ptx, pty, m_huberThreshold, segmentInside);
 #endif
     errors[static_cast<size_t>(i)] = energy;
-    if (energy < bestEnergy) {
-      bestU = ptx;
-      bestV = pty;
-      bestEnergy = energy;
+    if (energy < best.energy) {
+      best.u = ptx;
+      best.v = pty;
+      best.energy = energy;
       bestIndex = i;
     }
     ptx += stepU;
     pty += stepV;
   }
-  out.searchSteps = numSteps;
+  updateQuality(pt, errors, numSteps, bestIndex, best.energy);
+  return best;
+}
 
-  // Quality: best energy away from the best match over the best energy (DSO: distinctiveness of the match).
-  float secondBest = kNoEnergy;
-  for (int i = 0; i < numSteps; ++i) {
-    if ((i < bestIndex - kSecondBestExclusionRadius || i > bestIndex + kSecondBestExclusionRadius) &&
-        errors[static_cast<size_t>(i)] < secondBest) {
-      secondBest = errors[static_cast<size_t>(i)];
-    }
-  }
-  const float newQuality = secondBest / std::max(bestEnergy, kMinQualityDenominator);
-  if (newQuality < pt.quality || numSteps > kQualityRefreshSteps) {
-    pt.quality = newQuality;
-  }
-
-  // ---- Gauss-Newton refinement along the line (1 unknown: the position in steps), gradient-weighted energy.
+void ImmaturePointTracer::refineAlongLine(const ImmaturePoint &pt, const TraceContext &context,
+                                          const std::array<float, kPatternSize> &reference, LineMatch &match) const
+{
+  const PyramidLevel &target = *context.targetLevel;
+  const std::array<Eigen::Vector2f, kPatternSize> &offsets = context.rotatedPattern;
+  const float stepU = match.stepU, stepV = match.stepV;
+  float bestU = match.u, bestV = match.v, bestEnergy = match.energy;
   float uBackup = bestU, vBackup = bestV, stepBack = 0.f;
   if (m_gaussNewtonIterations > 0) {
     bestEnergy = kInitialGaussNewtonEnergy;
@@ -529,32 +573,83 @@ TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &co
       break;
     }
   }
-  out.bestEnergy = bestEnergy;
+  match.u = bestU;
+  match.v = bestV;
+  match.energy = bestEnergy;
+}
 
-  // ---- Energy-based outlier test; two outliers in a row end the point (DSO).
-  if (!(bestEnergy < pt.energyThreshold * m_extraSlackOnThreshold)) {
-    const TraceStatus status = pt.lastStatus == TraceStatus::outlier ? TraceStatus::outOfBounds : TraceStatus::outlier;
-    return finish(status, -1.f, -1.f, 0.f);
-  }
-
-  // ---- New interval: refined position +- the expected error, mapped back to inverse depth through the image
-  // axis along which the line runs faster (better conditioned division, DSO).
+ImmaturePointTracer::TraceEnd ImmaturePointTracer::updateInterval(ImmaturePoint &pt, const TraceContext &context,
+                                                                  const EpipolarSegment &segment,
+                                                                  const LineMatch &match, float errorInPixel)
+{
+  const Eigen::Vector3f &Kt = context.Kt;
+  const Eigen::Vector3f &pr = segment.pr;
+  const float dirU = segment.dirU, dirV = segment.dirV;
   float idepthA, idepthB;
   if (dirU * dirU > dirV * dirV) {
-    idepthA = idepthFromCoordinate(bestU - errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
-    idepthB = idepthFromCoordinate(bestU + errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
+    idepthA = idepthFromCoordinate(match.u - errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
+    idepthB = idepthFromCoordinate(match.u + errorInPixel * dirU, pr.x(), pr.z(), Kt.x(), Kt.z());
   } else {
-    idepthA = idepthFromCoordinate(bestV - errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
-    idepthB = idepthFromCoordinate(bestV + errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
+    idepthA = idepthFromCoordinate(match.v - errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
+    idepthB = idepthFromCoordinate(match.v + errorInPixel * dirV, pr.y(), pr.z(), Kt.y(), Kt.z());
   }
   const float newMin = std::min(idepthA, idepthB);
   const float newMax = std::max(idepthA, idepthB);
   if (!std::isfinite(newMin) || !std::isfinite(newMax) || newMax < 0.f) {
-    return finish(TraceStatus::outlier, -1.f, -1.f, 0.f);
+    return TraceEnd{TraceStatus::outlier, -1.f, -1.f, 0.f};
   }
   // Negative inverse depths lie "beyond infinity": clip, a visible point has idepth >= 0.
   pt.idepthMin = std::max(newMin, 0.f);
   pt.idepthMax = newMax;
-  return finish(TraceStatus::good, bestU, bestV, 2.f * errorInPixel);
+  return TraceEnd{TraceStatus::good, match.u, match.v, 2.f * errorInPixel};
+}
+
+TraceStatus ImmaturePointTracer::trace(ImmaturePoint &pt, const TraceContext &context, TraceResult *result) const
+{
+  TraceResult local;
+  TraceResult &out = result != nullptr ? *result : local;
+  out = TraceResult();
+  const auto finish = [&pt, &out](const TraceEnd &end) {
+    pt.lastStatus = end.status;
+    out.status = end.status;
+    out.u = end.u;
+    out.v = end.v;
+    out.pixelInterval = end.pixelInterval;
+    return end.status;
+  };
+  // An out-of-bounds point stays so: it has left the field of view for good (DSO).
+  if (pt.lastStatus == TraceStatus::outOfBounds) {
+    return finish(TraceEnd::outOfBounds());
+  }
+
+  EpipolarSegment segment;
+  if (const std::optional<TraceEnd> end = projectInterval(pt, context, segment)) {
+    return finish(*end);
+  }
+  // Expected pixel error: small when the host gradients lie along the epipolar line (DSO errorInPixel).
+  float errorInPixel;
+  if (const std::optional<TraceEnd> end = expectedPixelError(pt, context, segment, errorInPixel)) {
+    return finish(*end);
+  }
+
+  // Discrete search along the segment, unweighted Huber SSD of the pattern (DSO).
+  std::array<float, kPatternSize> reference;
+  for (int k = 0; k < kPatternSize; ++k) {
+    reference[static_cast<size_t>(k)] = context.aji * pt.patch[static_cast<size_t>(k)] + context.bji;
+  }
+  LineMatch match = searchAlongLine(pt, context, segment, reference, out.searchSteps);
+
+  // Gauss-Newton refinement along the line (1 unknown: the position in steps), gradient-weighted energy.
+  refineAlongLine(pt, context, reference, match);
+  out.bestEnergy = match.energy;
+
+  // Energy-based outlier test; two outliers in a row end the point (DSO).
+  if (!(match.energy < pt.energyThreshold * m_extraSlackOnThreshold)) {
+    const TraceStatus status = pt.lastStatus == TraceStatus::outlier ? TraceStatus::outOfBounds : TraceStatus::outlier;
+    return finish(TraceEnd{status, -1.f, -1.f, 0.f});
+  }
+  // New interval: refined position +- the expected error, mapped back to inverse depth through the image axis along
+  // which the line runs faster (better conditioned division, DSO).
+  return finish(updateInterval(pt, context, segment, match, errorInPixel));
 }
 } // namespace hslam

@@ -29,6 +29,7 @@
 #include <Eigen/Core>
 
 #include <array>
+#include <optional>
 #include <vector>
 
 namespace hslam
@@ -128,6 +129,26 @@ public:
   static float projectedIntervalLength(const ImmaturePoint &pt, const SE3d &targetMhost, const PinholeIntrinsics &K0);
 
 private:
+  struct TraceEnd;        // how a trace ends: status, reported target pixel and interval length
+  struct EpipolarSegment; // the interval projected onto the epipolar line
+  struct LineMatch;       // best match along the line
+
+  //! Projects the interval onto the target's epipolar line; an end when it leaves the image or needs no search.
+  std::optional<TraceEnd> projectInterval(const ImmaturePoint &pt, const TraceContext &context,
+                                          EpipolarSegment &segment) const;
+  //! Expected matching error along the line, pixels (DSO errorInPixel); an end when the search cannot improve.
+  std::optional<TraceEnd> expectedPixelError(const ImmaturePoint &pt, const TraceContext &context,
+                                             const EpipolarSegment &segment, float &errorInPixel) const;
+  //! Discrete search of the pattern along the segment (\e numSteps positions); updates the point's quality.
+  LineMatch searchAlongLine(ImmaturePoint &pt, const TraceContext &context, const EpipolarSegment &segment,
+                            const std::array<float, kPatternSize> &reference, int &numSteps) const;
+  //! Gauss-Newton refinement of the match along the line (one unknown: the position in steps).
+  void refineAlongLine(const ImmaturePoint &pt, const TraceContext &context,
+                       const std::array<float, kPatternSize> &reference, LineMatch &match) const;
+  //! New inverse-depth interval from the refined match +- the expected error (or an outlier end).
+  static TraceEnd updateInterval(ImmaturePoint &pt, const TraceContext &context, const EpipolarSegment &segment,
+                                 const LineMatch &match, float errorInPixel);
+
   float m_huberThreshold;         //!< intensity units
   float m_gradientWeightCSq;      //!< c^2 of the gradient weight
   float m_outlierEnergyPerPixel;  //!< intensity^2

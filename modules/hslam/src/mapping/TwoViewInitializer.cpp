@@ -277,6 +277,173 @@ void TwoViewInitializer::refineMatches(const vpImage<unsigned char> &I, std::vec
   }
 }
 
+namespace
+{
+//! The two models of the first and current views, each scored over the matches (ORB-SLAM2 model selection).
+struct TwoViewModels {
+  double scoreF = 0.; //!< fundamentalScore() of the best essential matrix
+  Eigen::Matrix3d E = Eigen::Matrix3d::Zero();
+  std::vector<unsigned char> inliersF;
+  double scoreH = 0.; //!< homographyScore()
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  cv::Mat Hcv; //!< empty when no homography was found
+  std::vector<unsigned char> inliersH;
+};
+
+//! RANSAC essential matrix (the best scored of the 5-point solver's stacked solutions) and homography, scored.
+TwoViewModels fitModels(const std::vector<cv::Point2d> &cv1, const std::vector<cv::Point2d> &cv2, const PixelVector &p1,
+                        const PixelVector &p2, const cv::Mat &Kcv, const Eigen::Matrix3d &Kinv, double sigma,
+                        double confidence)
+{
+  TwoViewModels models;
+  cv::Mat Es = cv::findEssentialMat(cv1, cv2, Kcv, cv::RANSAC, confidence, sigma);
+  std::vector<unsigned char> tmpInliers;
+  for (int k = 0; k + 3 <= Es.rows; k += 3) {
+    Eigen::Matrix3d E;
+    cv::cv2eigen(Es.rowRange(k, k + 3), E);
+    const double s = fundamentalScore(Kinv.transpose() * E * Kinv, p1, p2, sigma, tmpInliers);
+    if (s > models.scoreF) {
+      models.scoreF = s;
+      models.E = E;
+      models.inliersF = tmpInliers;
+    }
+  }
+  models.Hcv = cv::findHomography(cv1, cv2, cv::RANSAC, sigma, cv::noArray(), kHomographyMaxIters, confidence);
+  if (!models.Hcv.empty()) {
+    cv::cv2eigen(models.Hcv, models.H);
+    models.scoreH = homographyScore(models.H, p1, p2, sigma, models.inliersH);
+  }
+  return models;
+}
+
+//! Candidate motions of the chosen model: the homography's decompositions or the essential matrix's four.
+std::vector<Hypothesis> motionHypotheses(const TwoViewModels &models, bool useHomography, const cv::Mat &Kcv)
+{
+  std::vector<Hypothesis> hypotheses;
+  if (useHomography) {
+    std::vector<cv::Mat> Rs, ts, normals;
+    cv::decomposeHomographyMat(models.Hcv, Kcv, Rs, ts, normals);
+    for (size_t k = 0; k < Rs.size(); ++k) {
+      Hypothesis h;
+      cv::cv2eigen(Rs[k], h.R);
+      cv::cv2eigen(ts[k], h.t);
+      // t is known up to the plane distance; a null t (pure rotation) is kept: it fails the parallax test.
+      if (h.t.norm() > 0.) {
+        h.t.normalize();
+      }
+      hypotheses.push_back(h);
+    }
+  } else if (models.scoreF > 0.) {
+    cv::Mat Ecv, R1, R2, t;
+    cv::eigen2cv(models.E, Ecv);
+    cv::decomposeEssentialMat(Ecv, R1, R2, t);
+    for (const cv::Mat &Rcv : {R1, R2}) {
+      for (const double sign : {1., -1.}) {
+        Hypothesis h;
+        cv::cv2eigen(Rcv, h.R);
+        cv::cv2eigen(t, h.t);
+        h.t *= sign;
+        hypotheses.push_back(h);
+      }
+    }
+  }
+  return hypotheses;
+}
+
+/*!
+  The hypothesis with the most points in front of both cameras (checkMotion), if it is clearly better than the
+  others and has enough points and parallax; then polished on all its points (the minimal RANSAC sample used 5)
+  and triangulated again into \e check.
+*/
+TwoViewAttempt::Outcome selectMotion(const std::vector<Hypothesis> &hypotheses, const PinholeIntrinsics &K,
+                                     const PixelVector &p1, const PixelVector &p2,
+                                     const std::vector<unsigned char> &inliers, int numModelInliers, double sigma,
+                                     const vpHSlamParameters::Initializer &params, TwoViewAttempt &attempt,
+                                     Hypothesis &motion, MotionCheck &check)
+{
+  const double maxReprojErrSq = kReprojErrFactorSq * sigma * sigma;
+  std::vector<MotionCheck> checks;
+  int best = -1, bestGood = 0, secondGood = 0;
+  for (size_t k = 0; k < hypotheses.size(); ++k) {
+    checks.push_back(checkMotion(hypotheses[k].R, hypotheses[k].t, K, p1, p2, inliers, maxReprojErrSq));
+    const int good = checks.back().numGood;
+    if (good > bestGood) {
+      secondGood = bestGood;
+      bestGood = good;
+      best = static_cast<int>(k);
+    } else if (good > secondGood) {
+      secondGood = good;
+    }
+  }
+  attempt.numInliers = bestGood;
+  if (best < 0) {
+    return TwoViewAttempt::modelFailed;
+  }
+  attempt.parallaxDeg = checks[static_cast<size_t>(best)].medianParallaxDeg;
+  if (bestGood < params.minMatches || bestGood < kMinGoodFractionOfInliers * numModelInliers) {
+    return TwoViewAttempt::tooFewInliers;
+  }
+  if (attempt.parallaxDeg < params.minParallaxDeg) {
+    return TwoViewAttempt::lowParallax;
+  }
+  if (secondGood > kMaxSecondBestRatio * bestGood) {
+    return TwoViewAttempt::ambiguousMotion;
+  }
+
+  motion = hypotheses[static_cast<size_t>(best)];
+  if (refineRelativePose(motion.R, motion.t, K, p1, p2, checks[static_cast<size_t>(best)].good,
+                         kRefineHuberFactor * sigma, &attempt.translationDirSigmaDeg)) {
+    checks[static_cast<size_t>(best)] = checkMotion(motion.R, motion.t, K, p1, p2, inliers, maxReprojErrSq);
+  }
+  check = checks[static_cast<size_t>(best)];
+  attempt.numInliers = check.numGood;
+  attempt.parallaxDeg = check.medianParallaxDeg;
+  // The refined motion may trade translation for rotation (small-baseline ambiguity): check again.
+  if (check.numGood < params.minMatches) {
+    return TwoViewAttempt::tooFewInliers;
+  }
+  if (check.medianParallaxDeg < params.minParallaxDeg) {
+    return TwoViewAttempt::lowParallax;
+  }
+  return TwoViewAttempt::initialized;
+}
+
+/*!
+  The triangulated points with enough parallax, and the motion, scaled so that the median inverse depth is
+  \e initialIdepth (with |t| = 1 the depths are in baselines). False when fewer than \e minMatches points remain.
+*/
+bool scaledInitialization(const MotionCheck &check, const Hypothesis &motion, const PixelVector &p1,
+                          const PixelVector &p2, const vpHSlamParameters::Initializer &params,
+                          TwoViewInitialization &result)
+{
+  std::vector<double> idepths;
+  for (size_t i = 0; i < p1.size(); ++i) {
+    if (!check.good[i] || check.parallaxDeg[i] < kMinPointParallaxDeg || check.X1[i].z() <= 0.) {
+      continue;
+    }
+    InitialPoint pt;
+    pt.u = p1[i].x();
+    pt.v = p1[i].y();
+    pt.uCur = p2[i].x();
+    pt.vCur = p2[i].y();
+    pt.idepth = 1. / check.X1[i].z();
+    pt.parallaxDeg = check.parallaxDeg[i];
+    result.points.push_back(pt);
+    idepths.push_back(pt.idepth);
+  }
+  if (static_cast<int>(idepths.size()) < params.minMatches) {
+    return false;
+  }
+  std::nth_element(idepths.begin(), idepths.begin() + static_cast<std::ptrdiff_t>(idepths.size() / 2), idepths.end());
+  const double scale = idepths[idepths.size() / 2] / params.initialIdepth;
+  for (InitialPoint &pt : result.points) {
+    pt.idepth /= scale;
+  }
+  result.c2Mc1 = SE3d(Eigen::Matrix3d(motion.R), Eigen::Vector3d(motion.t * scale));
+  return true;
+}
+} // namespace
+
 TwoViewAttempt::Outcome TwoViewInitializer::solve(const std::vector<Match> &matches, TwoViewAttempt &attempt)
 {
   const int n = static_cast<int>(matches.size());
@@ -304,144 +471,32 @@ TwoViewAttempt::Outcome TwoViewInitializer::solve(const std::vector<Match> &matc
   cv::Mat Kcv;
   cv::eigen2cv(Keig, Kcv);
   const double sigma = m_params.ransacThresholdPx;
-
-  // Essential matrix: the 5-point solver may return several solutions stacked; keep the best scored one.
-  cv::Mat Es = cv::findEssentialMat(cv1, cv2, Kcv, cv::RANSAC, m_params.ransacConfidence, sigma);
-  double scoreF = 0.;
-  Eigen::Matrix3d bestE = Eigen::Matrix3d::Zero();
-  std::vector<unsigned char> inliersF, tmpInliers;
-  for (int k = 0; k + 3 <= Es.rows; k += 3) {
-    Eigen::Matrix3d E;
-    cv::cv2eigen(Es.rowRange(k, k + 3), E);
-    const double s = fundamentalScore(Kinv.transpose() * E * Kinv, p1, p2, sigma, tmpInliers);
-    if (s > scoreF) {
-      scoreF = s;
-      bestE = E;
-      inliersF = tmpInliers;
-    }
-  }
-  cv::Mat Hcv =
-      cv::findHomography(cv1, cv2, cv::RANSAC, sigma, cv::noArray(), kHomographyMaxIters, m_params.ransacConfidence);
-  double scoreH = 0.;
-  std::vector<unsigned char> inliersH;
-  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  if (!Hcv.empty()) {
-    cv::cv2eigen(Hcv, H);
-    scoreH = homographyScore(H, p1, p2, sigma, inliersH);
-  }
-  if (scoreF + scoreH <= 0.) {
+  const TwoViewModels models = fitModels(cv1, cv2, p1, p2, Kcv, Kinv, sigma, m_params.ransacConfidence);
+  if (models.scoreF + models.scoreH <= 0.) {
     return TwoViewAttempt::modelFailed;
   }
-  attempt.scoreRatioH = scoreH / (scoreH + scoreF);
+  attempt.scoreRatioH = models.scoreH / (models.scoreH + models.scoreF);
   const bool useHomography = attempt.scoreRatioH > kHomographyScoreRatio;
 
-  std::vector<Hypothesis> hypotheses;
-  if (useHomography) {
-    std::vector<cv::Mat> Rs, ts, normals;
-    cv::decomposeHomographyMat(Hcv, Kcv, Rs, ts, normals);
-    for (size_t k = 0; k < Rs.size(); ++k) {
-      Hypothesis h;
-      cv::cv2eigen(Rs[k], h.R);
-      cv::cv2eigen(ts[k], h.t);
-      // t is known up to the plane distance; a null t (pure rotation) is kept: it fails the parallax test.
-      if (h.t.norm() > 0.) {
-        h.t.normalize();
-      }
-      hypotheses.push_back(h);
-    }
-  } else if (scoreF > 0.) {
-    cv::Mat Ecv, R1, R2, t;
-    cv::eigen2cv(bestE, Ecv);
-    cv::decomposeEssentialMat(Ecv, R1, R2, t);
-    for (const cv::Mat &Rcv : {R1, R2}) {
-      for (const double sign : {1., -1.}) {
-        Hypothesis h;
-        cv::cv2eigen(Rcv, h.R);
-        cv::cv2eigen(t, h.t);
-        h.t *= sign;
-        hypotheses.push_back(h);
-      }
-    }
-  }
-  const std::vector<unsigned char> &inliers = useHomography ? inliersH : inliersF;
+  const std::vector<Hypothesis> hypotheses = motionHypotheses(models, useHomography, Kcv);
+  const std::vector<unsigned char> &inliers = useHomography ? models.inliersH : models.inliersF;
   const int numModelInliers = static_cast<int>(std::count(inliers.begin(), inliers.end(), 1));
   if (hypotheses.empty() || numModelInliers < m_params.minMatches) {
     attempt.numInliers = numModelInliers;
     return hypotheses.empty() ? TwoViewAttempt::modelFailed : TwoViewAttempt::tooFewInliers;
   }
-
-  const double maxReprojErrSq = kReprojErrFactorSq * sigma * sigma;
-  std::vector<MotionCheck> checks;
-  int best = -1, bestGood = 0, secondGood = 0;
-  for (size_t k = 0; k < hypotheses.size(); ++k) {
-    checks.push_back(checkMotion(hypotheses[k].R, hypotheses[k].t, m_K, p1, p2, inliers, maxReprojErrSq));
-    const int good = checks.back().numGood;
-    if (good > bestGood) {
-      secondGood = bestGood;
-      bestGood = good;
-      best = static_cast<int>(k);
-    } else if (good > secondGood) {
-      secondGood = good;
-    }
-  }
-  attempt.numInliers = bestGood;
-  if (best < 0) {
-    return TwoViewAttempt::modelFailed;
-  }
-  attempt.parallaxDeg = checks[static_cast<size_t>(best)].medianParallaxDeg;
-  if (bestGood < m_params.minMatches || bestGood < kMinGoodFractionOfInliers * numModelInliers) {
-    return TwoViewAttempt::tooFewInliers;
-  }
-  if (attempt.parallaxDeg < m_params.minParallaxDeg) {
-    return TwoViewAttempt::lowParallax;
-  }
-  if (secondGood > kMaxSecondBestRatio * bestGood) {
-    return TwoViewAttempt::ambiguousMotion;
-  }
-
-  // Polish the motion on all its points (the minimal RANSAC sample used 5), then triangulate again.
-  Hypothesis motion = hypotheses[static_cast<size_t>(best)];
-  if (refineRelativePose(motion.R, motion.t, m_K, p1, p2, checks[static_cast<size_t>(best)].good,
-                         kRefineHuberFactor * sigma, &attempt.translationDirSigmaDeg)) {
-    checks[static_cast<size_t>(best)] = checkMotion(motion.R, motion.t, m_K, p1, p2, inliers, maxReprojErrSq);
-  }
-  const MotionCheck &check = checks[static_cast<size_t>(best)];
-  attempt.numInliers = check.numGood;
-  attempt.parallaxDeg = check.medianParallaxDeg;
-  // The refined motion may trade translation for rotation (small-baseline ambiguity): check again.
-  if (check.numGood < m_params.minMatches) {
-    return TwoViewAttempt::tooFewInliers;
-  }
-  if (check.medianParallaxDeg < m_params.minParallaxDeg) {
-    return TwoViewAttempt::lowParallax;
+  Hypothesis motion;
+  MotionCheck check;
+  const TwoViewAttempt::Outcome outcome =
+      selectMotion(hypotheses, m_K, p1, p2, inliers, numModelInliers, sigma, m_params, attempt, motion, check);
+  if (outcome != TwoViewAttempt::initialized) {
+    return outcome;
   }
 
   TwoViewInitialization result;
-  std::vector<double> idepths;
-  for (size_t i = 0; i < p1.size(); ++i) {
-    if (!check.good[i] || check.parallaxDeg[i] < kMinPointParallaxDeg || check.X1[i].z() <= 0.) {
-      continue;
-    }
-    InitialPoint pt;
-    pt.u = p1[i].x();
-    pt.v = p1[i].y();
-    pt.uCur = p2[i].x();
-    pt.vCur = p2[i].y();
-    pt.idepth = 1. / check.X1[i].z();
-    pt.parallaxDeg = check.parallaxDeg[i];
-    result.points.push_back(pt);
-    idepths.push_back(pt.idepth);
-  }
-  if (static_cast<int>(idepths.size()) < m_params.minMatches) {
+  if (!scaledInitialization(check, motion, p1, p2, m_params, result)) {
     return TwoViewAttempt::tooFewInliers;
   }
-  // Scale: with |t| = 1 the depths are in baselines; rescale so the median inverse depth is initialIdepth.
-  std::nth_element(idepths.begin(), idepths.begin() + static_cast<std::ptrdiff_t>(idepths.size() / 2), idepths.end());
-  const double scale = idepths[idepths.size() / 2] / m_params.initialIdepth;
-  for (InitialPoint &pt : result.points) {
-    pt.idepth /= scale;
-  }
-  result.c2Mc1 = SE3d(Eigen::Matrix3d(motion.R), Eigen::Vector3d(motion.t * scale));
   result.numInliers = check.numGood;
   result.parallaxDeg = check.medianParallaxDeg;
   result.fromHomography = useHomography;

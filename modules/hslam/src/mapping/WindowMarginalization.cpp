@@ -107,26 +107,9 @@ std::vector<PairInformation> WindowOptimizer::pairInformation(int keyframeId)
   return out;
 }
 
-void WindowOptimizer::marginalizeKeyframe(int keyframeId)
+void WindowOptimizer::marginalizeHostedPoints(int idx)
 {
-  m_accCurrent = false;
-  int idx = -1;
-  for (size_t i = 0; i < m_frames.size(); ++i) {
-    if (m_frames[i].kf->id() == keyframeId) {
-      idx = static_cast<int>(i);
-    }
-  }
-  if (idx < 0) {
-    throw vpHSlamException(vpHSlamException::invalidArgument,
-                           where(__LINE__) + "keyframe " + std::to_string(keyframeId) + " is not in the window");
-  }
-  syncStatesAndPoints();
-  prepareContext();
   const int n = static_cast<int>(m_frames.size());
-  const bool fixed = idx == gaugeFixedIndex();
-
-  // 1. The keyframe's points: linearise, keep those with a well-constrained inverse depth (DSO
-  //    setting_minIdepthH_marg), Schur-complement them into a frame system (DSO marginalizePointsF).
   std::vector<int> hosted;
   for (size_t i = 0; i < m_points.size(); ++i) {
     if (m_points[i].host == idx) {
@@ -161,9 +144,10 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
   if (!marg.empty()) {
     m_prior.add(0.5 * (Hm + Hm.transpose()), bm, m_states);
   }
+}
 
-  // 2. Points leave the window: hosted ones become marginalised (kept for the global map with their last
-  //    inverse depth and variance); residuals of other points into the keyframe are dropped (DSO).
+void WindowOptimizer::removePointsWithKeyframe(int idx)
+{
   std::vector<char> remove(m_points.size(), 0);
   for (size_t i = 0; i < m_points.size(); ++i) {
     WindowPoint &p = m_points[i];
@@ -189,8 +173,10 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
     }
   }
   removePointsIf(remove);
+}
 
-  // 3. The keyframe's 8 states (DSO marginalizeFrame).
+void WindowOptimizer::removeKeyframeStates(int idx, bool fixed)
+{
   if (fixed) {
     m_gaugeAnchor = m_states[static_cast<size_t>(idx)];
     m_hasAnchor = true;
@@ -207,6 +193,32 @@ void WindowOptimizer::marginalizeKeyframe(int keyframeId)
   if (m_frames.empty()) {
     m_gaugeKeyframeId = -1;
   }
+}
+
+void WindowOptimizer::marginalizeKeyframe(int keyframeId)
+{
+  m_accCurrent = false;
+  int idx = -1;
+  for (size_t i = 0; i < m_frames.size(); ++i) {
+    if (m_frames[i].kf->id() == keyframeId) {
+      idx = static_cast<int>(i);
+    }
+  }
+  if (idx < 0) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           where(__LINE__) + "keyframe " + std::to_string(keyframeId) + " is not in the window");
+  }
+  syncStatesAndPoints();
+  prepareContext();
+  const bool fixed = idx == gaugeFixedIndex();
+  // 1. The keyframe's points: linearise, keep those with a well-constrained inverse depth (DSO
+  //    setting_minIdepthH_marg), Schur-complement them into a frame system (DSO marginalizePointsF).
+  marginalizeHostedPoints(idx);
+  // 2. Points leave the window: hosted ones become marginalised (kept for the global map with their last
+  //    inverse depth and variance); residuals of other points into the keyframe are dropped (DSO).
+  removePointsWithKeyframe(idx);
+  // 3. The keyframe's 8 states (DSO marginalizeFrame).
+  removeKeyframeStates(idx, fixed);
 }
 
 std::vector<int> WindowOptimizer::keyframesToMarginalize() const

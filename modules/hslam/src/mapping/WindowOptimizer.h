@@ -202,6 +202,13 @@ private:
   void finalizeOutliers(OptimizationSummary &summary);
   void removePointsIf(const std::vector<char> &remove);
   void remapAfterFrameRemoval(int removed);
+  //! marginalizeKeyframe(), step 1: the well-constrained points of window keyframe \e idx, Schur-complemented
+  //! into the prior with the keyframe's affine prior.
+  void marginalizeHostedPoints(int idx);
+  //! marginalizeKeyframe(), step 2: points hosted by \e idx, or observed only by it, leave the window.
+  void removePointsWithKeyframe(int idx);
+  //! marginalizeKeyframe(), step 3: the keyframe's states leave the prior and the window (written to the keyframe).
+  void removeKeyframeStates(int idx, bool fixed);
   //! (host, target) pairs of a candidate point, indexed by target (the host's entry is unused).
   using CandidatePairs = std::array<FramePairPrecalc, kMaxWindowKeyframes>;
   void setCandidatePairs(int host, CandidatePairs &pairs) const;

@@ -280,6 +280,142 @@ void CoarseTracker::buildSystem(int level, const ResidualStats &stats, const Aff
   b(kIndexB) += hB * affine.b;
 }
 
+CoarseTracker::ResidualStats CoarseTracker::evaluateWithCutoffRepeat(int level, const PyramidLevel &target,
+                                                                     const SE3d &newMref,
+                                                                     const AffineBrightness &affine, double newExposure,
+                                                                     float baseCutoff, float &cutoffRepeat)
+{
+  cutoffRepeat = 1.f;
+  ResidualStats stats = evaluate(level, target, newMref, affine, newExposure, baseCutoff);
+  while (stats.numTerms > 0 && static_cast<double>(stats.numSaturated) > kMaxSaturatedRatio * stats.numTerms &&
+         cutoffRepeat < kMaxCutoffRepeat) {
+    cutoffRepeat *= 2.f;
+    stats = evaluate(level, target, newMref, affine, newExposure, baseCutoff * cutoffRepeat);
+  }
+  return stats;
+}
+
+CoarseTracker::LevelWeights CoarseTracker::levelWeights(int stepFromCoarsest, const ResidualStats &stats) const
+{
+  // Joint objective (GeometricTerm): photometric mean energy / s_p^2 + K_l E_g / (n_g s_g^2); without a
+  // geometric term the weights are not applied at all (pure DSO alignment, bit for bit).
+  LevelWeights weights;
+  weights.joint = m_geometric != nullptr && !m_geometric->Xref.empty();
+  if (weights.joint) {
+    const double sp2 = std::max(stats.energy / stats.numTerms, kMinPhotometricVariance);
+    weights.K = geometricWeight(stepFromCoarsest, m_geometric->inliers);
+    weights.wp = 1. / sp2;
+    weights.wg = (m_geometric->poseFromGeometryOnly ? 1. : weights.K) /
+                 ((m_geometric->count > 0. ? m_geometric->count : static_cast<double>(m_geometric->Xref.size())) *
+                  std::max(m_geometric->sigma2Px, kMinGeometricVariance));
+  }
+  return weights;
+}
+
+double CoarseTracker::levelObjective(const LevelWeights &weights, const ResidualStats &stats,
+                                     const AffineBrightness &affine, const SE3d &newMref) const
+{
+  const double photometric = (stats.energy + priorEnergy(affine)) / stats.numTerms;
+  return weights.joint ? weights.wp * photometric + weights.wg * geometricEnergy(*m_geometric, m_K0, newMref)
+                       : photometric;
+}
+
+void CoarseTracker::levelSystem(int level, const LevelWeights &weights, const ResidualStats &stats,
+                                const AffineBrightness &affine, const SE3d &newMref, Eigen::Matrix<double, 8, 8> &H,
+                                Eigen::Matrix<double, 8, 1> &b) const
+{
+  buildSystem(level, stats, affine, H, b);
+  if (!weights.joint) {
+    return;
+  }
+  H *= weights.wp;
+  b *= weights.wp;
+  if (m_geometric->poseFromGeometryOnly) {
+    H.topRows<6>().setZero();
+    H.leftCols<6>().setZero();
+    b.head<6>().setZero();
+  }
+  Eigen::Matrix<double, 8, 8> Hg = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> bg = Eigen::Matrix<double, 8, 1>::Zero();
+  geometricEnergy(*m_geometric, m_K0, newMref, &Hg, &bg);
+  H += weights.wg * Hg;
+  b += weights.wg * bg;
+}
+
+void CoarseTracker::optimizeLevel(int level, const PyramidLevel &target, double newExposure, float cutoff,
+                                  const LevelWeights &weights, SE3d &newMref, AffineBrightness &affine,
+                                  ResidualStats &stats, int &iterations)
+{
+  double objectiveOld = levelObjective(weights, stats, affine, newMref);
+  Eigen::Matrix<double, 8, 8> H;
+  Eigen::Matrix<double, 8, 1> b;
+  levelSystem(level, weights, stats, affine, newMref, H, b);
+  double lambda = kInitialLambda;
+  const size_t iterIndex = std::min(static_cast<size_t>(level), m_params.iterationsPerLevel.size() - 1);
+  const int maxIterations = m_params.iterationsPerLevel[iterIndex];
+  for (int it = 0; it < maxIterations; ++it) {
+    ++iterations;
+    Eigen::Matrix<double, 8, 8> Hl = H;
+    Hl.diagonal() *= (1. + lambda);
+    Eigen::Matrix<double, 8, 1> inc = Hl.ldlt().solve(-b);
+    // DSO: with little damping the step is lengthened a little (fourth root of the damping ratio).
+    if (lambda < kLambdaExtrapolationLimit) {
+      inc *= std::sqrt(std::sqrt(kLambdaExtrapolationLimit / lambda));
+    }
+    if (!inc.allFinite()) {
+      inc.setZero();
+    }
+    const SE3d candidate = SE3d::exp(inc.head<6>()) * newMref;
+    AffineBrightness candidateAffine = affine;
+    candidateAffine.a += inc[kIndexA];
+    candidateAffine.b += inc[kIndexB];
+    const ResidualStats statsNew = evaluate(level, target, candidate, candidateAffine, newExposure, cutoff);
+    const double objectiveNew = statsNew.numTerms >= kCoarseMinResiduals
+                                    ? levelObjective(weights, statsNew, candidateAffine, candidate)
+                                    : std::numeric_limits<double>::infinity();
+    if (objectiveNew < objectiveOld) {
+      newMref = candidate;
+      affine = candidateAffine;
+      stats = statsNew;
+      objectiveOld = objectiveNew;
+      levelSystem(level, weights, stats, affine, newMref, H, b);
+      lambda *= kLambdaOnAccept;
+    } else {
+      lambda *= kLambdaOnReject;
+      lambda = std::max(lambda, kLambdaExtrapolationLimit);
+    }
+    Eigen::Matrix<double, 8, 1> scaled;
+    for (int j = 0; j < 8; ++j) {
+      scaled[j] = inc[j] / kStepScale[j];
+    }
+    if (!(scaled.norm() > kMinIncrementNorm)) {
+      break;
+    }
+  }
+}
+
+namespace
+{
+//! The RMSE, flow indicators and inlier ratio of a finished level (\e stats describes the kept state) into \e result.
+void recordLevel(int level, const CoarseTracker::ResidualStats &stats, CoarseTrackingResult &result)
+{
+  const double rmse = std::sqrt(stats.energy / std::max(1, stats.numTerms));
+  result.rmse[static_cast<size_t>(level)] = rmse;
+  result.flowT = stats.shiftT / (stats.shiftSamples + kFlowSampleRegulariser);
+  result.flowR = stats.shiftR / (stats.shiftSamples + kFlowSampleRegulariser);
+  result.flowRT = stats.shiftRT / (stats.shiftSamples + kFlowSampleRegulariser);
+  result.residuals = stats.numTerms;
+  result.inlierRatio = stats.numTerms > 0 ? 1. - static_cast<double>(stats.numAboveBaseCutoff) / stats.numTerms : 0.;
+}
+} // namespace
+
+bool CoarseTracker::brightnessPlausible(double newExposure, const AffineBrightness &affine) const
+{
+  double aji = 1., bji = 0.;
+  AffineBrightness::transfer(m_refExposure, m_refAffine, newExposure, affine, aji, bji);
+  return !(!(aji > 0.) || std::fabs(std::log(aji)) > kMaxLogGainChange || std::fabs(bji) > kMaxOffsetChange);
+}
+
 bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness &affine, CoarseTrackingResult &result,
                           const CoarseRmsePerLevel *abortRmse)
 {
@@ -305,7 +441,6 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
   SE3d current = newMref;
   AffineBrightness currentAffine = affine;
   bool haveRepeated = false;
-  ResidualStats statsOld;
   auto fail = [&](CoarseTrackingStatus status, int level) {
     result.status = status;
     result.failedLevel = level;
@@ -313,131 +448,34 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     result.affine = currentAffine;
     return false;
   };
+  const bool geometryOnly = m_geometric != nullptr && m_geometric->poseFromGeometryOnly;
 
   for (int lvl = levels - 1; lvl >= 0; --lvl) {
     const PyramidLevel &target = pyr.level(lvl);
     float cutoffRepeat = 1.f;
-    statsOld = evaluate(lvl, target, current, currentAffine, exposure, baseCutoff);
-    while (statsOld.numTerms > 0 &&
-           static_cast<double>(statsOld.numSaturated) > kMaxSaturatedRatio * statsOld.numTerms &&
-           cutoffRepeat < kMaxCutoffRepeat) {
-      cutoffRepeat *= 2.f;
-      statsOld = evaluate(lvl, target, current, currentAffine, exposure, baseCutoff * cutoffRepeat);
-    }
-    if (statsOld.numTerms < kCoarseMinResiduals) {
+    ResidualStats stats =
+        evaluateWithCutoffRepeat(lvl, target, current, currentAffine, exposure, baseCutoff, cutoffRepeat);
+    if (stats.numTerms < kCoarseMinResiduals) {
       return fail(CoarseTrackingStatus::tooFewResiduals, lvl);
     }
-    const float cutoff = baseCutoff * cutoffRepeat;
-    // Joint objective (GeometricTerm): photometric mean energy / s_p^2 + K_l E_g / (n_g s_g^2); without a
-    // geometric term the weights are not applied at all (pure DSO alignment, bit for bit).
-    const bool joint = m_geometric != nullptr && !m_geometric->Xref.empty();
-    double wp = 1., wg = 0.;
-    if (joint) {
-      const double sp2 = std::max(statsOld.energy / statsOld.numTerms, kMinPhotometricVariance);
-      const double K = geometricWeight(levels - 1 - lvl, m_geometric->inliers);
-      wp = 1. / sp2;
-      wg = (m_geometric->poseFromGeometryOnly ? 1. : K) /
-           ((m_geometric->count > 0. ? m_geometric->count : static_cast<double>(m_geometric->Xref.size())) *
-            std::max(m_geometric->sigma2Px, kMinGeometricVariance));
-      if (lvl == 0) {
-        result.geometricWeight = K;
-      }
+    const LevelWeights weights = levelWeights(levels - 1 - lvl, stats);
+    if (weights.joint && lvl == 0) {
+      result.geometricWeight = weights.K;
     }
-    auto objective = [&](const ResidualStats &stats, const AffineBrightness &a, const SE3d &pose) {
-      const double photometric = (stats.energy + priorEnergy(a)) / stats.numTerms;
-      return joint ? wp * photometric + wg * geometricEnergy(*m_geometric, m_K0, pose) : photometric;
-    };
-    auto system = [&](const ResidualStats &stats, const AffineBrightness &a, const SE3d &pose,
-                      Eigen::Matrix<double, 8, 8> &H, Eigen::Matrix<double, 8, 1> &b) {
-      buildSystem(lvl, stats, a, H, b);
-      if (!joint) {
-        return;
-      }
-      H *= wp;
-      b *= wp;
-      if (m_geometric->poseFromGeometryOnly) {
-        H.topRows<6>().setZero();
-        H.leftCols<6>().setZero();
-        b.head<6>().setZero();
-      }
-      Eigen::Matrix<double, 8, 8> Hg = Eigen::Matrix<double, 8, 8>::Zero();
-      Eigen::Matrix<double, 8, 1> bg = Eigen::Matrix<double, 8, 1>::Zero();
-      geometricEnergy(*m_geometric, m_K0, pose, &Hg, &bg);
-      H += wg * Hg;
-      b += wg * bg;
-    };
-    double objectiveOld = objective(statsOld, currentAffine, current);
-
-    Eigen::Matrix<double, 8, 8> H;
-    Eigen::Matrix<double, 8, 1> b;
-    system(statsOld, currentAffine, current, H, b);
-    double lambda = kInitialLambda;
-    const size_t iterIndex = std::min(static_cast<size_t>(lvl), m_params.iterationsPerLevel.size() - 1);
-    const int maxIterations = m_params.iterationsPerLevel[iterIndex];
-    for (int it = 0; it < maxIterations; ++it) {
-      ++result.iterations;
-      Eigen::Matrix<double, 8, 8> Hl = H;
-      Hl.diagonal() *= (1. + lambda);
-      Eigen::Matrix<double, 8, 1> inc = Hl.ldlt().solve(-b);
-      // DSO: with little damping the step is lengthened a little (fourth root of the damping ratio).
-      if (lambda < kLambdaExtrapolationLimit) {
-        inc *= std::sqrt(std::sqrt(kLambdaExtrapolationLimit / lambda));
-      }
-      if (!inc.allFinite()) {
-        inc.setZero();
-      }
-      const SE3d candidate = SE3d::exp(inc.head<6>()) * current;
-      AffineBrightness candidateAffine = currentAffine;
-      candidateAffine.a += inc[kIndexA];
-      candidateAffine.b += inc[kIndexB];
-      const ResidualStats statsNew = evaluate(lvl, target, candidate, candidateAffine, exposure, cutoff);
-      const double objectiveNew = statsNew.numTerms >= kCoarseMinResiduals
-                                      ? objective(statsNew, candidateAffine, candidate)
-                                      : std::numeric_limits<double>::infinity();
-      if (objectiveNew < objectiveOld) {
-        current = candidate;
-        currentAffine = candidateAffine;
-        statsOld = statsNew;
-        objectiveOld = objectiveNew;
-        system(statsOld, currentAffine, current, H, b);
-        lambda *= kLambdaOnAccept;
-      } else {
-        lambda *= kLambdaOnReject;
-        lambda = std::max(lambda, kLambdaExtrapolationLimit);
-      }
-      Eigen::Matrix<double, 8, 1> scaled;
-      for (int j = 0; j < 8; ++j) {
-        scaled[j] = inc[j] / kStepScale[j];
-      }
-      if (!(scaled.norm() > kMinIncrementNorm)) {
-        break;
-      }
-    }
-    // statsOld describes the kept state (set on acceptance), whatever the buffers hold now.
-    const double rmse = std::sqrt(statsOld.energy / std::max(1, statsOld.numTerms));
-    result.rmse[static_cast<size_t>(lvl)] = rmse;
-    result.flowT = statsOld.shiftT / (statsOld.shiftSamples + kFlowSampleRegulariser);
-    result.flowR = statsOld.shiftR / (statsOld.shiftSamples + kFlowSampleRegulariser);
-    result.flowRT = statsOld.shiftRT / (statsOld.shiftSamples + kFlowSampleRegulariser);
-    result.residuals = statsOld.numTerms;
-    result.inlierRatio =
-        statsOld.numTerms > 0 ? 1. - static_cast<double>(statsOld.numAboveBaseCutoff) / statsOld.numTerms : 0.;
+    optimizeLevel(lvl, target, exposure, baseCutoff * cutoffRepeat, weights, current, currentAffine, stats,
+                  result.iterations);
+    recordLevel(lvl, stats, result);
+    const double rmse = result.rmse[static_cast<size_t>(lvl)];
     if (!std::isfinite(rmse) || !current.translation().allFinite()) {
       return fail(CoarseTrackingStatus::notFinite, lvl);
     }
-    const bool geometryOnly = m_geometric != nullptr && m_geometric->poseFromGeometryOnly;
     if (!geometryOnly && abortRmse != nullptr && rmse > kAbortResidualFactor * (*abortRmse)[static_cast<size_t>(lvl)]) {
       return fail(CoarseTrackingStatus::worseThanBound, lvl);
     }
-    {
-      // DSO checks the brightness after every level: a frame that cannot be aligned (covered lens) is matched by
-      // a vanishing gain at the coarsest level already; going on would cost every finer level for nothing.
-      double ajiLevel = 1., bjiLevel = 0.;
-      AffineBrightness::transfer(m_refExposure, m_refAffine, exposure, currentAffine, ajiLevel, bjiLevel);
-      if (!(ajiLevel > 0.) || std::fabs(std::log(ajiLevel)) > kMaxLogGainChange ||
-          std::fabs(bjiLevel) > kMaxOffsetChange) {
-        return fail(CoarseTrackingStatus::implausibleBrightness, lvl);
-      }
+    // DSO checks the brightness after every level: a frame that cannot be aligned (covered lens) is matched by
+    // a vanishing gain at the coarsest level already; going on would cost every finer level for nothing.
+    if (!brightnessPlausible(exposure, currentAffine)) {
+      return fail(CoarseTrackingStatus::implausibleBrightness, lvl);
     }
     // DSO: a level that needed a larger cutoff is run once more (the pose is now better, the cutoff resets).
     if (cutoffRepeat > 1.f && !haveRepeated) {
@@ -446,13 +484,10 @@ bool CoarseTracker::track(const Frame &newFrame, SE3d &newMref, AffineBrightness
     }
   }
 
-  const bool geometryOnly = m_geometric != nullptr && m_geometric->poseFromGeometryOnly;
   if (!geometryOnly && 1. - result.inlierRatio > kMaxSaturatedRatio) {
     return fail(CoarseTrackingStatus::tooManyOutliers, 0);
   }
-  double aji = 1., bji = 0.;
-  AffineBrightness::transfer(m_refExposure, m_refAffine, exposure, currentAffine, aji, bji);
-  if (!(aji > 0.) || std::fabs(std::log(aji)) > kMaxLogGainChange || std::fabs(bji) > kMaxOffsetChange) {
+  if (!brightnessPlausible(exposure, currentAffine)) {
     return fail(CoarseTrackingStatus::implausibleBrightness, 0);
   }
   result.success = true;

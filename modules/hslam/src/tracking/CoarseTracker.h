@@ -307,6 +307,31 @@ private:
   void buildSystem(int level, const ResidualStats &stats, const AffineBrightness &affine,
                    Eigen::Matrix<double, 8, 8> &H, Eigen::Matrix<double, 8, 1> &b) const;
   double priorEnergy(const AffineBrightness &affine) const;
+  //! Weights of the photometric and geometric parts of a level's objective (joint objective, GeometricTerm).
+  struct LevelWeights {
+    bool joint = false; //!< a geometric term is set: the weights apply
+    double wp = 1.;     //!< 1 / s_p^2
+    double wg = 0.;     //!< K_l / (n_g s_g^2)
+    double K = 0.;      //!< K_l (eq. 4)
+  };
+  //! evaluate(), the cutoff doubled while too many residuals saturate (DSO); \e cutoffRepeat the factor used.
+  ResidualStats evaluateWithCutoffRepeat(int level, const PyramidLevel &target, const SE3d &newMref,
+                                         const AffineBrightness &affine, double newExposure, float baseCutoff,
+                                         float &cutoffRepeat);
+  //! Weights of the level \e stepFromCoarsest steps below the coarsest one, from its first evaluation \e stats.
+  LevelWeights levelWeights(int stepFromCoarsest, const ResidualStats &stats) const;
+  //! The objective a level minimises: mean photometric energy with the priors, plus the weighted geometric term.
+  double levelObjective(const LevelWeights &weights, const ResidualStats &stats, const AffineBrightness &affine,
+                        const SE3d &newMref) const;
+  //! Normal equations of levelObjective() at the last evaluated state.
+  void levelSystem(int level, const LevelWeights &weights, const ResidualStats &stats, const AffineBrightness &affine,
+                   const SE3d &newMref, Eigen::Matrix<double, 8, 8> &H, Eigen::Matrix<double, 8, 1> &b) const;
+  //! Levenberg-damped Gauss-Newton on one level (DSO trackNewestCoarse's inner loop); \e stats of the kept state.
+  void optimizeLevel(int level, const PyramidLevel &target, double newExposure, float cutoff,
+                     const LevelWeights &weights, SE3d &newMref, AffineBrightness &affine, ResidualStats &stats,
+                     int &iterations);
+  //! The brightness transfer from the reference is plausible (DSO: |log a_ji| <= 1.5, |b_ji| <= 200).
+  bool brightnessPlausible(double newExposure, const AffineBrightness &affine) const;
 
   vpHSlamParameters::Tracker m_params;
   bool m_photometricCalibration;

@@ -115,6 +115,97 @@ std::vector<std::pair<int, int>> matchExhaustive(const RelocalizationKeyframe &k
   return assignment.matches();
 }
 
+namespace
+{
+//! The 3-D / 2-D pairs of \e matches (keyframe point, frame keypoint) for OpenCV and as observations (with the
+//! keypoint's scale as its variance when known).
+void matchedPairs(const RelocalizationKeyframe &keyframe, const RelocalizationFrame &frame,
+                  const std::vector<std::pair<int, int>> &matches, std::vector<cv::Point3d> &objectPoints,
+                  std::vector<cv::Point2d> &imagePoints, std::vector<ReprojectionObservation> &observations)
+{
+  for (const auto &m : matches) {
+    const Eigen::Vector3d &X = keyframe.wX[static_cast<std::size_t>(m.first)];
+    const Eigen::Vector2d &uv = frame.uv[static_cast<std::size_t>(m.second)];
+    objectPoints.emplace_back(X.x(), X.y(), X.z());
+    imagePoints.emplace_back(uv.x(), uv.y());
+    ReprojectionObservation obs;
+    obs.wX = X;
+    obs.uv = uv;
+    if (static_cast<std::size_t>(m.second) < frame.scale.size()) {
+      const double s = static_cast<double>(frame.scale[static_cast<std::size_t>(m.second)]);
+      obs.sigma2 = s * s;
+    }
+    observations.push_back(obs);
+  }
+}
+
+//! PnP RANSAC (EPnP or AP3P): false on a degenerate configuration or fewer than minMatches inliers.
+bool pnpRansacPose(const std::vector<cv::Point3d> &objectPoints, const std::vector<cv::Point2d> &imagePoints,
+                   const cv::Mat &cameraMatrix, const RelocalizerOptions &options, SE3d &cTw,
+                   std::vector<int> &ransacInliers)
+{
+  cv::Mat rvec, tvec;
+  bool solved = false;
+  try {
+    solved = cv::solvePnPRansac(objectPoints, imagePoints, cameraMatrix, cv::noArray(), rvec, tvec, false,
+                                options.ransacIterations, static_cast<float>(options.ransacThresholdPx),
+                                options.ransacConfidence, ransacInliers,
+                                options.minimalP3P ? cv::SOLVEPNP_AP3P : cv::SOLVEPNP_EPNP);
+  } catch (const cv::Exception &) {
+    solved = false; // degenerate configuration: try the next candidate
+  }
+  if (!solved || static_cast<int>(ransacInliers.size()) < options.minMatches) {
+    return false;
+  }
+  cv::Mat R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d rotation;
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) {
+      rotation(r, c) = R.at<double>(r, c);
+    }
+  }
+  cTw = SE3d(Eigen::Quaterniond(rotation), Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
+  return true;
+}
+
+/*!
+  With refineOnConsensus, the PnP pose is refined on the RANSAC inliers first (ORB-SLAM2 too): with loose matching
+  most matches are wrong, and a robust optimisation over all of them is pulled away from the PnP pose (measured on
+  7-Scenes after a 40-frame cover: 20-41 RANSAC inliers of about 210 matches, 0 left after refining on all). From
+  that pose every match is classified again: the observations that agree with it, and the pose, are returned.
+  Without it, every observation and the PnP pose.
+*/
+std::vector<ReprojectionObservation> observationsToRefine(const SE3d &cTwPnP,
+                                                          const std::vector<ReprojectionObservation> &observations,
+                                                          const std::vector<int> &ransacInliers,
+                                                          const PinholeIntrinsics &K, const RelocalizerOptions &options,
+                                                          SE3d &cTwStart)
+{
+  cTwStart = cTwPnP;
+  if (!options.refineOnConsensus) {
+    return observations;
+  }
+  std::vector<ReprojectionObservation> consensus;
+  consensus.reserve(ransacInliers.size());
+  for (int i : ransacInliers) {
+    if (i >= 0 && static_cast<std::size_t>(i) < observations.size()) {
+      consensus.push_back(observations[static_cast<std::size_t>(i)]);
+    }
+  }
+  cTwStart = optimizePoseOnly(cTwPnP, consensus, K, options.refinement).cTw;
+  std::vector<ReprojectionObservation> refinedOn;
+  for (const ReprojectionObservation &obs : observations) {
+    Eigen::Vector2d r;
+    if (reprojectionResidual(cTwStart, obs, K, options.refinement.minDepth, r) &&
+        r.squaredNorm() <= options.refinement.chi2Threshold * obs.sigma2) {
+      refinedOn.push_back(obs);
+    }
+  }
+  return refinedOn;
+}
+} // namespace
+
 RelocalizationResult relocalize(const RelocalizationFrame &frame,
                                 const std::vector<const RelocalizationKeyframe *> &candidates,
                                 const PinholeIntrinsics &K, const RelocalizerOptions &options)
@@ -136,69 +227,15 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
     std::vector<cv::Point3d> objectPoints;
     std::vector<cv::Point2d> imagePoints;
     std::vector<ReprojectionObservation> observations;
-    for (const auto &m : matches) {
-      const Eigen::Vector3d &X = keyframe->wX[static_cast<std::size_t>(m.first)];
-      const Eigen::Vector2d &uv = frame.uv[static_cast<std::size_t>(m.second)];
-      objectPoints.emplace_back(X.x(), X.y(), X.z());
-      imagePoints.emplace_back(uv.x(), uv.y());
-      ReprojectionObservation obs;
-      obs.wX = X;
-      obs.uv = uv;
-      if (static_cast<std::size_t>(m.second) < frame.scale.size()) {
-        const double s = static_cast<double>(frame.scale[static_cast<std::size_t>(m.second)]);
-        obs.sigma2 = s * s;
-      }
-      observations.push_back(obs);
-    }
-    cv::Mat rvec, tvec;
+    matchedPairs(*keyframe, frame, matches, objectPoints, imagePoints, observations);
+    SE3d cTwPnP;
     std::vector<int> ransacInliers;
-    bool solved = false;
-    try {
-      solved = cv::solvePnPRansac(objectPoints, imagePoints, cameraMatrix, cv::noArray(), rvec, tvec, false,
-                                  options.ransacIterations, static_cast<float>(options.ransacThresholdPx),
-                                  options.ransacConfidence, ransacInliers,
-                                  options.minimalP3P ? cv::SOLVEPNP_AP3P : cv::SOLVEPNP_EPNP);
-    } catch (const cv::Exception &) {
-      solved = false; // degenerate configuration: try the next candidate
-    }
-    if (!solved || static_cast<int>(ransacInliers.size()) < options.minMatches) {
+    if (!pnpRansacPose(objectPoints, imagePoints, cameraMatrix, options, cTwPnP, ransacInliers)) {
       continue;
     }
-    cv::Mat R;
-    cv::Rodrigues(rvec, R);
-    Eigen::Matrix3d rotation;
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) {
-        rotation(r, c) = R.at<double>(r, c);
-      }
-    }
-    const SE3d cTwPnP(Eigen::Quaterniond(rotation),
-                      Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)));
-    // With refineOnConsensus, refined on the RANSAC inliers first (ORB-SLAM2 too): with loose matching most matches
-    // are wrong, and a robust optimisation over all of them is pulled away from the PnP pose (measured on 7-Scenes
-    // after a 40-frame cover: 20-41 RANSAC inliers of about 210 matches, 0 left after refining on all). From that
-    // pose every match is classified again, and those that agree with it are refined together.
-    std::vector<ReprojectionObservation> refinedOn;
-    SE3d cTwStart = cTwPnP;
-    if (options.refineOnConsensus) {
-      std::vector<ReprojectionObservation> consensus;
-      consensus.reserve(ransacInliers.size());
-      for (int i : ransacInliers) {
-        if (i >= 0 && static_cast<std::size_t>(i) < observations.size()) {
-          consensus.push_back(observations[static_cast<std::size_t>(i)]);
-        }
-      }
-      cTwStart = optimizePoseOnly(cTwPnP, consensus, K, options.refinement).cTw;
-      for (const ReprojectionObservation &obs : observations) {
-        Eigen::Vector2d r;
-        if (reprojectionResidual(cTwStart, obs, K, options.refinement.minDepth, r) &&
-            r.squaredNorm() <= options.refinement.chi2Threshold * obs.sigma2) {
-          refinedOn.push_back(obs);
-        }
-      }
-    } else {
-      refinedOn = observations;
-    }
+    SE3d cTwStart;
+    const std::vector<ReprojectionObservation> refinedOn =
+        observationsToRefine(cTwPnP, observations, ransacInliers, K, options, cTwStart);
     const PoseOnlyResult refined = optimizePoseOnly(cTwStart, refinedOn, K, options.refinement);
     result.inliers = std::max(result.inliers, refined.inliers);
     if (refined.inliers >= options.minInliers) {
@@ -226,6 +263,7 @@ RelocalizationResult relocalize(const RelocalizationFrame &frame,
   result.nearMissInliers = nearMiss.nearMissInliers;
   return result;
 }
+
 double medianDepth(const SE3d &cTw, const std::vector<Eigen::Vector3d> &wX)
 {
   std::vector<double> depths;

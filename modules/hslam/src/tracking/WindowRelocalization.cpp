@@ -31,36 +31,25 @@ Eigen::Vector2d normalised(const Eigen::Vector2d &uv, const PinholeIntrinsics &K
 {
   return Eigen::Vector2d((uv.x() - K.cx) / K.fx, (uv.y() - K.cy) / K.fy);
 }
-} // namespace
 
-int triangulateViews(const DescribedView &a, const DescribedView &b, const PinholeIntrinsics &K,
-                     const ViewTriangulationOptions &options, std::vector<unsigned char> &done,
-                     std::vector<Eigen::Vector3d> &wX, std::vector<OrbDescriptor> &descriptors)
+//! F = K^-T [t]x R K^-1: pixels of b on the epipolar line of a pixel of a satisfy x_b^T F x_a = 0 (X_b = R X_a + t).
+Eigen::Matrix3d fundamentalMatrix(const Eigen::Matrix3d &R, const Eigen::Vector3d &t, const PinholeIntrinsics &K)
 {
-  const std::size_t na = std::min(a.uv.size(), std::min(a.descriptors.size(), a.scale.size()));
-  const std::size_t nb = std::min(b.uv.size(), std::min(b.descriptors.size(), b.scale.size()));
-  done.resize(a.uv.size(), 0);
-  if (na == 0 || nb == 0) {
-    return 0;
-  }
-  // X_b = R X_a + t; pixels of b on the epipolar line of a pixel of a: x_b^T F x_a = 0 with F = K^-T [t]x R K^-1.
-  const SE3d bMa = b.cMw * a.cMw.inverse();
-  const Eigen::Matrix3d R = bMa.rotationMatrix();
-  const Eigen::Vector3d t = bMa.translation();
-  if (!(t.norm() > 0.)) {
-    return 0; // no baseline: nothing to triangulate
-  }
   Eigen::Matrix3d tx;
   tx << 0., -t.z(), t.y(), t.z(), 0., -t.x(), -t.y(), t.x(), 0.;
   Eigen::Matrix3d Kinv;
   Kinv << 1. / K.fx, 0., -K.cx / K.fx, 0., 1. / K.fy, -K.cy / K.fy, 0., 0., 1.;
-  const Eigen::Matrix3d F = Kinv.transpose() * tx * R * Kinv;
-  const double minCosParallax = std::cos(options.minParallaxDeg * kPi / 180.);
-  const Eigen::Matrix3d Rwa = a.cMw.inverse().rotationMatrix();
-  const Eigen::Matrix3d Rwb = b.cMw.inverse().rotationMatrix();
-  const SE3d wMa = a.cMw.inverse();
+  return Kinv.transpose() * tx * R * Kinv;
+}
 
-  // Best keypoint of b for each free keypoint of a (within the epipolar band), then one keypoint of b per match.
+/*!
+  Best keypoint of b (of the first \e nb) for each free keypoint of a (of the first \e na) within the epipolar band,
+  then one keypoint of a per keypoint of b (the closest descriptor): per keypoint of b, its match in a or -1.
+*/
+std::vector<int> epipolarMatches(const DescribedView &a, std::size_t na, const DescribedView &b, std::size_t nb,
+                                 const Eigen::Matrix3d &F, const ViewTriangulationOptions &options,
+                                 const std::vector<unsigned char> &done)
+{
   std::vector<int> matchOfB(nb, -1), distanceOfB(nb, kNoDistance);
   for (std::size_t i = 0; i < na; ++i) {
     if (done[i]) {
@@ -97,32 +86,76 @@ int triangulateViews(const DescribedView &a, const DescribedView &b, const Pinho
       distanceOfB[j] = best;
     }
   }
+  return matchOfB;
+}
 
+//! The two views' relative motion (X_b = R X_a + t) and what the triangulation of their matches needs.
+struct ViewPair {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  Eigen::Matrix3d Rwa, Rwb; //!< rotations of the views' rays into the world
+  double minCosParallax;
+};
+
+//! Keypoint i of a and j of b triangulated into \e Xa (camera a): false with too little parallax, behind a camera,
+//! or reprojected too far from either keypoint.
+bool triangulateMatch(const DescribedView &a, std::size_t i, const DescribedView &b, std::size_t j,
+                      const ViewPair &pair, const PinholeIntrinsics &K, const ViewTriangulationOptions &options,
+                      Eigen::Vector3d &Xa)
+{
+  const Eigen::Vector2d xa = normalised(a.uv[i], K);
+  const Eigen::Vector2d xb = normalised(b.uv[j], K);
+  const Eigen::Vector3d rayA = pair.Rwa * Eigen::Vector3d(xa.x(), xa.y(), 1.);
+  const Eigen::Vector3d rayB = pair.Rwb * Eigen::Vector3d(xb.x(), xb.y(), 1.);
+  if (rayA.dot(rayB) / (rayA.norm() * rayB.norm()) > pair.minCosParallax) {
+    return false; // too little parallax for a depth
+  }
+  if (!triangulateLinear(xa, xb, pair.R, pair.t, Xa)) {
+    return false;
+  }
+  const Eigen::Vector3d Xb = pair.R * Xa + pair.t;
+  if (!(Xa.z() > 0.) || !(Xb.z() > 0.)) {
+    return false;
+  }
+  const double sa = options.reprojectionSigmaPx * static_cast<double>(a.scale[i]);
+  const double sb = options.reprojectionSigmaPx * static_cast<double>(b.scale[j]);
+  return !(reprojectionErrorSq(Xa, a.uv[i], K) > kChi2TwoDof * sa * sa ||
+           reprojectionErrorSq(Xb, b.uv[j], K) > kChi2TwoDof * sb * sb);
+}
+} // namespace
+
+int triangulateViews(const DescribedView &a, const DescribedView &b, const PinholeIntrinsics &K,
+                     const ViewTriangulationOptions &options, std::vector<unsigned char> &done,
+                     std::vector<Eigen::Vector3d> &wX, std::vector<OrbDescriptor> &descriptors)
+{
+  const std::size_t na = std::min(a.uv.size(), std::min(a.descriptors.size(), a.scale.size()));
+  const std::size_t nb = std::min(b.uv.size(), std::min(b.descriptors.size(), b.scale.size()));
+  done.resize(a.uv.size(), 0);
+  if (na == 0 || nb == 0) {
+    return 0;
+  }
+  const SE3d bMa = b.cMw * a.cMw.inverse();
+  ViewPair pair;
+  pair.R = bMa.rotationMatrix();
+  pair.t = bMa.translation();
+  if (!(pair.t.norm() > 0.)) {
+    return 0; // no baseline: nothing to triangulate
+  }
+  const Eigen::Matrix3d F = fundamentalMatrix(pair.R, pair.t, K);
+  pair.minCosParallax = std::cos(options.minParallaxDeg * kPi / 180.);
+  pair.Rwa = a.cMw.inverse().rotationMatrix();
+  pair.Rwb = b.cMw.inverse().rotationMatrix();
+  const SE3d wMa = a.cMw.inverse();
+
+  const std::vector<int> matchOfB = epipolarMatches(a, na, b, nb, F, options, done);
   int added = 0;
   for (std::size_t j = 0; j < nb; ++j) {
     if (matchOfB[j] < 0) {
       continue;
     }
     const std::size_t i = static_cast<std::size_t>(matchOfB[j]);
-    const Eigen::Vector2d xa = normalised(a.uv[i], K);
-    const Eigen::Vector2d xb = normalised(b.uv[j], K);
-    const Eigen::Vector3d rayA = Rwa * Eigen::Vector3d(xa.x(), xa.y(), 1.);
-    const Eigen::Vector3d rayB = Rwb * Eigen::Vector3d(xb.x(), xb.y(), 1.);
-    if (rayA.dot(rayB) / (rayA.norm() * rayB.norm()) > minCosParallax) {
-      continue; // too little parallax for a depth
-    }
     Eigen::Vector3d Xa;
-    if (!triangulateLinear(xa, xb, R, t, Xa)) {
-      continue;
-    }
-    const Eigen::Vector3d Xb = R * Xa + t;
-    if (!(Xa.z() > 0.) || !(Xb.z() > 0.)) {
-      continue;
-    }
-    const double sa = options.reprojectionSigmaPx * static_cast<double>(a.scale[i]);
-    const double sb = options.reprojectionSigmaPx * static_cast<double>(b.scale[j]);
-    if (reprojectionErrorSq(Xa, a.uv[i], K) > kChi2TwoDof * sa * sa ||
-        reprojectionErrorSq(Xb, b.uv[j], K) > kChi2TwoDof * sb * sb) {
+    if (!triangulateMatch(a, i, b, j, pair, K, options, Xa)) {
       continue;
     }
     wX.push_back(wMa * Xa);
