@@ -356,7 +356,6 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
   if (!ok) {
     VP_HSLAM_LOG(vpHSlamLog::warning, "loop " << loop.keyframe << "-" << loop.candidate << " not corrected");
   }
-  m_stats.corrected += ok ? 1 : 0;
   return ok;
 }
 
@@ -509,18 +508,13 @@ LoopStatistics LoopCloser::statistics() const
   } else {
     s = m_stats;
   }
-  s.lastCorrectionMs = m_applied.lastCorrectionMs;
-  s.correctionMsMax = m_applied.correctionMsMax;
-  s.globalBaStarted = m_applied.globalBaStarted;
-  s.globalBaApplied = m_applied.globalBaApplied;
-  s.globalBaSecondsMax = m_applied.globalBaSecondsMax;
-  s.globalBaRmsBeforePx = m_applied.globalBaRmsBeforePx;
-  s.globalBaRmsAfterPx = m_applied.globalBaRmsAfterPx;
+  s.applied = m_applied;
   return s;
 }
 
 void LoopCloser::recordCorrectionApplied(double ms)
 {
+  ++m_applied.corrected;
   m_applied.lastCorrectionMs = ms;
   m_applied.correctionMsMax = std::max(m_applied.correctionMsMax, ms);
 }
@@ -543,6 +537,6 @@ void LoopCloser::resetStatistics()
     m_published = LoopStatistics();
   }
   m_stats = LoopStatistics();
-  m_applied = LoopStatistics();
+  m_applied = LoopApplyStatistics();
 }
 } // namespace hslam

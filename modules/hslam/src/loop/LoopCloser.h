@@ -72,22 +72,27 @@ struct LoopRecord {
   double translationDrift = 0.; //!< |translation part of the correction| (map units)
 };
 
-//! Counters of loop closure since the start.
-struct LoopStatistics {
-  int candidatesVerified = 0;      //!< consistent candidates given to the Sim(3) verification
-  std::vector<LoopRecord> loops;   //!< loops accepted
-  int corrected = 0;               //!< loops whose pose-graph correction was applied
-  int refusedImplausible = 0;      //!< verified loops refused for a rotation correction above the limit
-  double lastCorrectionMs = 0.;    //!< wall time of the last correction (graph, optimisation, map update)
+//! What the mapper applied of loop closure: correction times and global bundle adjustments.
+struct LoopApplyStatistics {
+  int corrected = 0;               //!< loops whose pose-graph correction was applied to the map
+  double lastCorrectionMs = 0.;    //!< wall time of the last correction (pose graph, map update)
   double correctionMsMax = 0.;     //!< longest correction
-  int detections = 0;              //!< keyframes checked for a loop (database queried)
-  double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
-  double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
   int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
   int globalBaApplied = 0;         //!< ... and written back
   double globalBaSecondsMax = 0.;  //!< longest of them, wall time, seconds
   double globalBaRmsBeforePx = 0.; //!< reprojection RMS of the last one applied, before and after, pixels
   double globalBaRmsAfterPx = 0.;
+};
+
+//! Counters of loop closure since the start.
+struct LoopStatistics {
+  int candidatesVerified = 0;    //!< consistent candidates given to the Sim(3) verification
+  std::vector<LoopRecord> loops; //!< loops accepted
+  int refusedImplausible = 0;    //!< verified loops refused for a rotation correction above the limit
+  int detections = 0;            //!< keyframes checked for a loop (database queried)
+  double detectionMsTotal = 0.;  //!< their wall time: query, consistency, verification (correction excluded)
+  double verificationMsMax = 0.; //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
+  LoopApplyStatistics applied;   //!< what the mapper applied
 };
 
 //! A loop that detect() accepted.
@@ -237,8 +242,8 @@ private:
   //! Every corrected loop's edges (the measured one and its connections), kept for the next corrections.
   std::vector<PoseGraphEdge> m_loopConstraints;
   LoopStatistics m_stats; //!< detection and correction counters (the thread's when threaded)
-  //! Counters of what the mapper applied (correction times, global bundle adjustments); the mapper's thread only.
-  LoopStatistics m_applied;
+  //! What the mapper applied (correction times, global bundle adjustments); the mapper's thread only.
+  LoopApplyStatistics m_applied;
   //! Real time: the global bundle adjustment's thread.
   BackgroundBundleAdjustment m_globalBa;
 

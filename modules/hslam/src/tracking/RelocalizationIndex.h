@@ -32,6 +32,19 @@
 
 namespace hslam
 {
+/*!
+  The relocalisation index of the current map segment.
+
+  What it owns: the bag-of-words database of the segment's keyframes and the final described corners (world
+  coordinates) of those that left the window.
+
+  What it is given: each new window keyframe (addKeyframe(): its selected points' descriptors), each keyframe leaving
+  the window (storeKeyframe()), culled keyframes (removeKeyframe()), stored keyframes a loop correction moved
+  (refreshKeyframe()), or a whole loaded map (indexGlobalMap()).
+
+  What it hands back: the keyframes most like a lost frame, each with its points and its neighbours' in world
+  coordinates and their direct index (candidatesFor()), which the relocaliser matches and solves PnP with.
+*/
 class VISP_EXPORT RelocalizationIndex
 {
 public:
