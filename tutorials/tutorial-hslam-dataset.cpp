@@ -7,7 +7,7 @@
 //! With --skip-unreadable, an image that cannot be decoded is counted as dropped and the run carries on.
 //! Stress runs: --stride K tracks every K-th frame (large motion), --blackout A:B feeds black frames (a covered
 //! lens), --there-and-back tracks the frames again in reverse order (re-timed after the last; --groundtruth-out
-//! writes the ground truth under the same stamps), --tracking-mode direct|indirect|hybrid selects the tracker.
+//! writes the ground truth under the same stamps), --tracking-mode direct|indirect|hybrid|adaptive selects the tracker.
 //! Options, frame playback and statistics: tutorials/dataset/.
 //!
 //!   ./tutorial-hslam-dataset --input ../shared/data/tsukuba_cg_000-149 --deterministic --no-display
@@ -333,6 +333,11 @@ void printSummary(const Arguments &args, const vpHSlamParameters &params, const 
     std::cout << "ORB: " << s.orbMatchesMedian << " matches, " << s.orbInliersMedian << " inliers (medians); K "
               << s.geometricWeightMedian << "; relocalisations " << s.relocalizationsSucceeded << "/"
               << s.relocalizationsAttempted << "\n";
+  }
+  if (params.tracking.mode == vpHSlamParameters::trackingAdaptive) {
+    std::cout << "adaptive tracking: geometric term in " << s.geometricTermFrames << " of " << s.trackedFrames
+              << " frames (large motion " << s.adaptiveLargeMotionFrames << ", prediction refused "
+              << s.adaptivePredictionRefusedFrames << ", direct failed " << s.adaptiveDirectFailedFrames << ")\n";
   }
   const double wallS = outcome.wallS, videoS = outcome.videoS;
   std::cout << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("

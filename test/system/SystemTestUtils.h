@@ -157,6 +157,63 @@ runSource(const std::string &path, unsigned int maxFrames, const vpHSlamParamete
   return run;
 }
 
+//! Frames of the second lap fed after the half turn of runHalfTurn() (the run stops there).
+constexpr unsigned int kHalfTurnFramesAfter = 60;
+
+//! What runHalfTurn() fed and got.
+struct HalfTurnRun {
+  SystemRun run;
+  vpHSlamTrajectory groundTruth; //!< every frame fed, the turn's included
+};
+
+/*!
+  The synthetic room's two laps (320x240, 200 frames a lap, seed 3) with a half turn in the second: after frame 260
+  the camera turns 180 degrees about its vertical axis and back, 3 degrees a frame, then goes on with the lap for
+  \e framesAfterTurn frames. Keyframes made while turning triangulate nothing: without the points kept on a depth
+  prior (mapper.rotationFlowPx) the window empties. With \e pivotBehind > 0 the camera turns about a vertical axis
+  that far behind its optical centre (a hand-held turn: the camera moves on an arc of that radius, metres).
+  Used by test_system_global_map and by the adaptive-tracking benchmark (hslam_half_turn).
+*/
+inline HalfTurnRun runHalfTurn(const vpHSlamParameters &params, double pivotBehind,
+                               unsigned int framesAfterTurn = kHalfTurnFramesAfter)
+{
+  constexpr unsigned int kLaps = 2, kFramesPerLap = 200, kTurnAt = kFramesPerLap + 60;
+  vpHSlamSyntheticScene scene;
+  scene.setLaps(kLaps);
+  scene.configure(320, 240, kLaps * kFramesPerLap + 1, 30., 3);
+  vpHSlam slam(syntheticCamera(scene), params);
+  HalfTurnRun r;
+  vpImage<unsigned char> I;
+  const double dt = 1. / scene.getFrameRate();
+  double t = 0.;
+  auto feed = [&](const vpHomogeneousMatrix &wMc) {
+    r.run.states.push_back(slam.track(I, t));
+    r.groundTruth.add(t, wMc);
+    t += dt;
+  };
+  for (unsigned int i = 0; i <= kTurnAt + framesAfterTurn && i < scene.getFrameCount(); ++i) {
+    scene.render(i, I);
+    feed(scene.getPose(i));
+    if (i != kTurnAt) {
+      continue;
+    }
+    const vpHomogeneousMatrix wMc = scene.getPose(i);
+    constexpr double kStepDeg = 3., kTurnDeg = 180.;
+    const int steps = static_cast<int>(kTurnDeg / kStepDeg);
+    const vpHomogeneousMatrix pivot(0., 0., -pivotBehind, 0., 0., 0.);
+    for (int j = 1; j <= 2 * steps; ++j) {
+      const double angle = vpMath::rad(kStepDeg * (j <= steps ? j : 2 * steps - j));
+      const vpHomogeneousMatrix turned = wMc * pivot * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.) * pivot.inverse();
+      scene.renderAtPose(turned, I, 1000u + static_cast<unsigned int>(j));
+      feed(turned);
+    }
+  }
+  slam.synchronize();
+  r.run.trajectory = slam.getTrajectory();
+  r.run.statistics = slam.getStatistics();
+  return r;
+}
+
 //! Sim(3)-aligned ATE RMSE of a run against a ground truth (ground-truth units).
 inline double simAte(const vpHSlamTrajectory &gt, const vpHSlamTrajectory &estimate)
 {

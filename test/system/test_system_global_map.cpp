@@ -99,59 +99,6 @@ TEST(SystemGlobalMap, SecondLapReusesLeanStoredKeyframes)
 
 namespace
 {
-struct TurnRun {
-  hslam_test::SystemRun run;
-  vpHSlamTrajectory groundTruth; //!< every frame fed, the turn's included
-};
-
-//! Frames of the second lap fed after the turn (the run stops there).
-constexpr unsigned int kFramesAfterTurn = 60;
-
-/*!
-  The synthetic room's two laps (fast enough for the test: 200 frames a lap) with a half turn in place in the second:
-  after frame \e turnAt the camera turns 180 degrees about its vertical axis and back, 3 degrees a frame, then goes
-  on with the lap for kFramesAfterTurn frames. Keyframes made while turning triangulate nothing: without the points
-  kept on a depth prior (mapper.rotationFlowPx) the window empties. With \e pivotBehind > 0 the camera turns about a
-  vertical axis that far behind its optical centre (a hand-held turn: the camera moves on an arc of that radius).
-*/
-TurnRun runWithTurn(const vpHSlamParameters &params, unsigned int turnAt, double pivotBehind = 0.,
-                    unsigned int framesAfterTurn = kFramesAfterTurn)
-{
-  vpHSlamSyntheticScene scene;
-  scene.setLaps(kLaps);
-  scene.configure(kWidth, kHeight, kFrames, 30., 3);
-  vpHSlam slam(hslam_test::syntheticCamera(scene), params);
-  TurnRun r;
-  vpImage<unsigned char> I;
-  const double dt = 1. / scene.getFrameRate();
-  double t = 0.;
-  auto feed = [&](const vpHomogeneousMatrix &wMc) {
-    r.run.states.push_back(slam.track(I, t));
-    r.groundTruth.add(t, wMc);
-    t += dt;
-  };
-  for (unsigned int i = 0; i <= turnAt + framesAfterTurn && i < scene.getFrameCount(); ++i) {
-    scene.render(i, I);
-    feed(scene.getPose(i));
-    if (i != turnAt) {
-      continue;
-    }
-    const vpHomogeneousMatrix wMc = scene.getPose(i);
-    constexpr double kStepDeg = 3., kTurnDeg = 180.;
-    const int steps = static_cast<int>(kTurnDeg / kStepDeg);
-    const vpHomogeneousMatrix pivot(0., 0., -pivotBehind, 0., 0., 0.);
-    for (int j = 1; j <= 2 * steps; ++j) {
-      const double angle = vpMath::rad(kStepDeg * (j <= steps ? j : 2 * steps - j));
-      const vpHomogeneousMatrix turned = wMc * pivot * vpHomogeneousMatrix(0., 0., 0., 0., angle, 0.) * pivot.inverse();
-      scene.renderAtPose(turned, I, 1000u + static_cast<unsigned int>(j));
-      feed(turned);
-    }
-  }
-  r.run.trajectory = slam.getTrajectory();
-  r.run.statistics = slam.getStatistics();
-  return r;
-}
-
 /*!
   Parameters of the half-turn runs. \e rotationPoints false drops new points whose depth the turn cannot measure (as
   DSO does, mapper.rotationFlowPx = 0): the window then empties during the turn, the scenario the seeding is for.
@@ -174,9 +121,9 @@ struct TurnOutcome {
 };
 
 TurnOutcome runTurnAndPrint(const vpHSlamParameters &params, const char *what, double pivotBehind = 0.,
-                            unsigned int framesAfterTurn = kFramesAfterTurn)
+                            unsigned int framesAfterTurn = hslam_test::kHalfTurnFramesAfter)
 {
-  const TurnRun r = runWithTurn(params, kFramesPerLap + 60, pivotBehind, framesAfterTurn);
+  const hslam_test::HalfTurnRun r = hslam_test::runHalfTurn(params, pivotBehind, framesAfterTurn);
   TurnOutcome o{r.run.statistics, hslam_test::simAte(r.groundTruth, r.run.trajectory)};
   std::cout << "half turn in place in the second lap, " << what << ": " << o.stats.trackedFrames << " tracked, "
             << o.stats.lostFrames << " lost, " << o.stats.segments << " segment(s), "

@@ -1,8 +1,11 @@
-// Helpers shared by the coarse tracker test and benchmark: frames of the synthetic scene with their pyramid, reference
-// points with exact inverse depth, ground-truth relative poses and pose errors.
+// Helpers shared by the tracking tests and benchmark: frames of the synthetic scene with their pyramid, reference
+// points with exact inverse depth, reference features (corners with descriptors), ground-truth relative poses and pose
+// errors.
 #ifndef HSLAM_TEST_TRACKING_UTILS_H
 #define HSLAM_TEST_TRACKING_UTILS_H
 
+#include "features/CornerDetector.h"
+#include "features/PointDescriptors.h"
 #include "map/Frame.h"
 #include "math/ViSPConversions.h"
 #include "tracking/CoarseTracker.h"
@@ -34,16 +37,16 @@ inline hslam::PinholeIntrinsics sceneIntrinsics(const vpHSlamSyntheticScene &sce
 }
 
 /*!
-  Frame i of the scene with intensities gain * I + offset (as floats, not clipped), pose cMw from the ground truth.
-  The rendering is blurred by a Gaussian of \e blurSigma pixels first (a lens point-spread function): the synthetic
-  textures are sharper than a real camera's images, and bilinear interpolation of such edges alone leaves residuals
-  of ~ 8 grey levels and a ~ 4 % contrast bias at the exact pose. Geometry (poses, depths) is unaffected.
+  An 8-bit image of the scene's camera as a tracking frame (pyramid and raw image), with intensities gain * I + offset
+  (as floats, not clipped); id, timestamp and pose are left to the caller. The rendering is blurred by a Gaussian of \e
+  blurSigma pixels first (a lens point-spread function): the synthetic textures are sharper than a real camera's images,
+  and bilinear interpolation of such edges alone leaves residuals of ~ 8 grey levels and a ~ 4 % contrast bias at the
+  exact pose. Geometry (poses, depths) is unaffected.
 */
-inline void makeFrame(const vpHSlamSyntheticScene &scene, unsigned int i, const vpHSlamParameters::Tracker &params,
-                      hslam::Frame &frame, double gain = 1., double offset = 0., double blurSigma = kTestBlurSigma)
+inline void makeFrameFromImage(const vpImage<unsigned char> &I8, const vpHSlamSyntheticScene &scene,
+                               const vpHSlamParameters::Tracker &params, hslam::Frame &frame, double gain = 1.,
+                               double offset = 0., double blurSigma = kTestBlurSigma)
 {
-  vpImage<unsigned char> I8;
-  scene.render(i, I8);
   cv::Mat src(static_cast<int>(I8.getHeight()), static_cast<int>(I8.getWidth()), CV_8UC1, I8.bitmap);
   cv::Mat f, blurred;
   src.convertTo(f, CV_32F, gain, offset);
@@ -56,11 +59,20 @@ inline void makeFrame(const vpHSlamSyntheticScene &scene, unsigned int i, const 
   for (int y = 0; y < blurred.rows; ++y) {
     std::copy(blurred.ptr<float>(y), blurred.ptr<float>(y) + blurred.cols, I[y]);
   }
+  frame.pyramid.build(I, sceneIntrinsics(scene), params.maxPyramidLevels, params.minCoarsestPixels);
+  frame.raw = I8;
+}
+
+//! Frame i of the scene, as makeFrameFromImage() makes it, with its id, timestamp and ground-truth pose.
+inline void makeFrame(const vpHSlamSyntheticScene &scene, unsigned int i, const vpHSlamParameters::Tracker &params,
+                      hslam::Frame &frame, double gain = 1., double offset = 0., double blurSigma = kTestBlurSigma)
+{
+  vpImage<unsigned char> I8;
+  scene.render(i, I8);
   frame.id = static_cast<int>(i);
   frame.timestamp = scene.getTimestamp(i);
   frame.cMw = hslam::toSE3(scene.getPose(i).inverse());
-  frame.pyramid.build(I, sceneIntrinsics(scene), params.maxPyramidLevels, params.minCoarsestPixels);
-  frame.raw = I8;
+  makeFrameFromImage(I8, scene, params, frame, gain, offset, blurSigma);
 }
 
 /*!
@@ -98,6 +110,38 @@ inline std::vector<hslam::CoarseTrackerPoint> selectPoints(const vpHSlamSyntheti
     }
   }
   return points;
+}
+
+/*!
+  FAST corners of \e frame (frame \e i of the scene) with their exact 3D position in that camera and their ORB
+  descriptor: the reference features of hybrid tracking.
+*/
+inline std::vector<hslam::ReferenceFeature> referenceFeatures(const vpHSlamSyntheticScene &scene, unsigned int i,
+                                                              const hslam::Frame &frame)
+{
+  const hslam::PinholeIntrinsics K = sceneIntrinsics(scene);
+  hslam::CornerOptions options;
+  options.border = hslam::kOrbBorderPx + 1;
+  std::vector<cv::Point2f> corners;
+  hslam::detectCorners(frame.raw, options, corners);
+  hslam::PointDescriptors describer;
+  std::vector<hslam::OrbDescriptor> descriptors;
+  std::vector<bool> valid;
+  std::vector<float> angles;
+  describer.compute(frame.raw, corners, descriptors, valid, &angles);
+  std::vector<hslam::ReferenceFeature> features;
+  for (size_t k = 0; k < corners.size(); ++k) {
+    if (!valid[k]) {
+      continue;
+    }
+    const double z = scene.depthAt(corners[k].x, corners[k].y, i);
+    hslam::ReferenceFeature f;
+    f.Xref = Eigen::Vector3d((corners[k].x - K.cx) / K.fx * z, (corners[k].y - K.cy) / K.fy * z, z);
+    f.orb = descriptors[k];
+    f.angleDeg = angles[k];
+    features.push_back(f);
+  }
+  return features;
 }
 
 //! Exact reference-to-new transform newMref = cMw(new) * wMc(ref).

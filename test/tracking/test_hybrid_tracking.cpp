@@ -43,26 +43,7 @@ protected:
     points = hslam_test::selectPoints(scene, 0, reference, 2000);
     K = hslam_test::sceneIntrinsics(scene);
     // Reference features: FAST corners of frame 0 with their exact 3D position and descriptor.
-    CornerOptions options;
-    options.border = kOrbBorderPx + 1;
-    std::vector<cv::Point2f> corners;
-    detectCorners(reference.raw, options, corners);
-    PointDescriptors describer;
-    std::vector<OrbDescriptor> descriptors;
-    std::vector<bool> valid;
-    std::vector<float> angles;
-    describer.compute(reference.raw, corners, descriptors, valid, &angles);
-    for (size_t i = 0; i < corners.size(); ++i) {
-      if (!valid[i]) {
-        continue;
-      }
-      const double z = scene.depthAt(corners[i].x, corners[i].y, 0);
-      ReferenceFeature f;
-      f.Xref = Eigen::Vector3d((corners[i].x - K.cx) / K.fx * z, (corners[i].y - K.cy) / K.fy * z, z);
-      f.orb = descriptors[i];
-      f.angleDeg = angles[i];
-      features.push_back(f);
-    }
+    features = hslam_test::referenceFeatures(scene, 0, reference);
   }
 
   vpHSlamParameters params;

@@ -74,7 +74,7 @@ void checkTrackingMode(const std::string &value)
     vpHSlamParameters::parseTrackingMode(value);
   } catch (const vpHSlamException &) {
     throw vpHSlamException(vpHSlamException::invalidArgument,
-                           "--tracking-mode expects direct, indirect or hybrid, got '" + value + "'");
+                           "--tracking-mode expects direct, indirect, hybrid or adaptive, got '" + value + "'");
   }
 }
 
@@ -197,8 +197,8 @@ void printUsage(const char *program, std::ostream &out)
       << " --input PATH [--format auto|euroc|tum-mono|tum-rgbd|kitti|images|video|v4l2]\n"
          "       [--camera FILE] [--max-frames N] [--start-frame N] [--stride K] [--blackout A:B] [--there-and-back]\n"
          "       [--fps HZ] [--groundtruth-out OUT.txt [--groundtruth GT.txt]]\n"
-         "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid] [--deterministic] [--speed "
-         "X]\n"
+         "       [--mode vo-strict|vo-reuse|slam] [--tracking-mode direct|indirect|hybrid|adaptive]\n"
+         "       [--deterministic] [--speed X]\n"
          "       [--config FILE.yaml] [--set SECTION.KEY=VALUE] [--save-config FILE.yaml] [--trajectory OUT.txt] "
          "[--keyframes OUT.txt]\n"
          "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--save-map OUT.hmap] [--load-map "
@@ -216,8 +216,9 @@ void printUsage(const char *program, std::ostream &out)
          "                     (global map re-used, relocalisation; no loop closure) or vo-strict (window\n"
          "                     only, DSO-like; relocalisation only with hybrid or indirect tracking);\n"
          "                     default: system.mode of --config, else slam\n"
-         "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches) or hybrid (both);\n"
-         "                     default: tracking.mode of --config, else direct\n"
+         "  --tracking-mode M  pose tracking: direct (photometric), indirect (ORB matches), hybrid (both) or\n"
+         "                     adaptive (direct, both when the motion makes it doubtful); default:\n"
+         "                     tracking.mode of --config, else direct\n"
          "  --deterministic    map in the tracking thread: identical output run to run (default: real time,\n"
          "                     mapping in its own thread)\n"
          "  --speed X          real-time mode: feed recorded frames at X times their frame rate, as a camera\n"
@@ -235,7 +236,9 @@ void printUsage(const char *program, std::ostream &out)
          "                     mapping_ms_per_keyframe_median, peak_rss_mb, memory_mb_per_keyframe, dropped_frames,\n"
          "                     wall_s, cpu_s, hybrid tracking (orb_matches_median, orb_inliers_median,\n"
          "                     geometric_weight_median, relocalizations_attempted, relocalizations_succeeded,\n"
-         "                     descriptor_kb_per_keyframe), the run's tracking_mode, stride, blackout (\"A:B\" or\n"
+         "                     descriptor_kb_per_keyframe, geometric_term_frames, geometric_term_share and, adaptive\n"
+         "                     tracking, adaptive_large_motion_frames, adaptive_prediction_refused_frames,\n"
+         "                     adaptive_direct_failed_frames), the run's tracking_mode, stride, blackout (\"A:B\" or\n"
          "                     \"\"), blacked_out_frames (both ways), there_and_back (true/false) and\n"
          "                     backward_frames, global map (marginalized_keyframes, culled_keyframes,\n"
          "                     global_points, reactivated_points_per_keyframe, window_share_from_global), ...\n"

@@ -34,7 +34,7 @@ struct Arguments {
   std::string input;
   vpHSlamImageSource::Options options;
   std::string mode;                  //!< vo-strict, vo-reuse or slam; empty: as --config (or the default, slam) says
-  std::string trackingMode;          //!< direct, indirect or hybrid; empty: as --config (or the default) says
+  std::string trackingMode;          //!< direct, indirect, hybrid or adaptive; empty: as --config (or the default) says
   std::vector<std::string> settings; //!< --set SECTION.KEY=VALUE, in order (applied after --config)
   bool deterministic = false;
   double speed = 1.; //!< real-time mode: play the sequence at this multiple of its frame rate (0: no pacing)

@@ -143,7 +143,7 @@ inline const Field kFields[] = {
   HSLAM_PARAM(initializer, initialIdepth, positive(), "median inverse depth of the first map, 1/m"),
   HSLAM_PARAM(initializer, orbFeatures, atLeast(8), "ORB features per frame while initialising"),
 
-  HSLAM_PARAM(tracking, mode, anyValue(), "direct, indirect or hybrid pose tracking"),
+  HSLAM_PARAM(tracking, mode, anyValue(), "direct, indirect, hybrid or adaptive pose tracking"),
   HSLAM_PARAM(tracking, frameFeatures, atLeast(0), "FAST corners described per new frame for matching"),
   HSLAM_PARAM(tracking, frameFastThreshold, between(1, 255), "FAST threshold on new frames"),
   HSLAM_PARAM(tracking, matchRadiusPx, positive(), "ORB search radius around a predicted pixel, pixels"),
@@ -161,6 +161,7 @@ inline const Field kFields[] = {
               "window relocalisation: share of photometric residuals below the cutoff"),
   HSLAM_PARAM(tracking, relocalizeInWindow, anyValue(), "also relocalise on ORB points triangulated in the window"),
   HSLAM_PARAM(tracking, seedFromStoredMap, anyValue(), "an emptied window is seeded again from the stored map"),
+  HSLAM_PARAM(tracking, adaptiveMotionPx, positive(), "adaptive: predicted motion (px at 640) for the geometric term"),
 
   HSLAM_PARAM(globalMap, covisibilityMinShared, atLeast(1), "points shared for a co-visibility edge"),
   HSLAM_PARAM(globalMap, cullObservedShare, between(0., 1.), "culling: share of points seen by enough others"),

@@ -437,6 +437,8 @@ std::string vpHSlamParameters::trackingModeName(TrackingMode mode)
     return "indirect";
   case trackingHybrid:
     return "hybrid";
+  case trackingAdaptive:
+    return "adaptive";
   }
   throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamParameters::trackingModeName: unknown value " +
                                                                 std::to_string(static_cast<int>(mode)));
@@ -444,11 +446,12 @@ std::string vpHSlamParameters::trackingModeName(TrackingMode mode)
 
 vpHSlamParameters::TrackingMode vpHSlamParameters::parseTrackingMode(const std::string &name)
 {
-  for (TrackingMode mode : {trackingDirect, trackingIndirect, trackingHybrid}) {
+  for (TrackingMode mode : {trackingDirect, trackingIndirect, trackingHybrid, trackingAdaptive}) {
     if (name == trackingModeName(mode)) {
       return mode;
     }
   }
   throw vpHSlamException(vpHSlamException::invalidArgument, "vpHSlamParameters::parseTrackingMode: unknown mode '" +
-                                                                name + "' (expected direct, indirect, hybrid)");
+                                                                name +
+                                                                "' (expected direct, indirect, hybrid, adaptive)");
 }

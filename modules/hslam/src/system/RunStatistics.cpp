@@ -89,6 +89,16 @@ void RunStatistics::addFrameMappingMs(double ms)
   m_frameMappingMs.push_back(ms);
 }
 
+void RunStatistics::addPosedFrame(GeometricReason reason)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  ++m_posedFrames;
+  m_geometricFrames += reason != GeometricReason::none ? 1 : 0;
+  m_geometricLargeMotion += reason == GeometricReason::largeMotion ? 1 : 0;
+  m_geometricPredictionRefused += reason == GeometricReason::predictionRefused ? 1 : 0;
+  m_geometricDirectFailed += reason == GeometricReason::directFailed ? 1 : 0;
+}
+
 void RunStatistics::addHybridFrame(int matches, int inliers, double geometricWeight)
 {
   std::lock_guard<std::mutex> lock(m_mutex);
@@ -121,6 +131,11 @@ RunStatistics::Summary RunStatistics::summary() const
   s.orbMatchesMedian = percentile(m_orbMatches, kMedian);
   s.orbInliersMedian = percentile(m_orbInliers, kMedian);
   s.geometricWeightMedian = percentile(m_geometricWeight, kMedian);
+  s.posedFrames = m_posedFrames;
+  s.geometricFrames = m_geometricFrames;
+  s.geometricLargeMotion = m_geometricLargeMotion;
+  s.geometricPredictionRefused = m_geometricPredictionRefused;
+  s.geometricDirectFailed = m_geometricDirectFailed;
   return s;
 }
 
@@ -133,6 +148,8 @@ void RunStatistics::clear()
   m_frameMappingMs.clear();
   m_orbMatches.clear();
   m_orbInliers.clear();
+  m_posedFrames = m_geometricFrames = 0;
+  m_geometricLargeMotion = m_geometricPredictionRefused = m_geometricDirectFailed = 0;
   m_geometricWeight.clear();
   m_framesDuringLoopCorrection = 0;
   m_trackingMsMaxDuringLoopCorrection = 0.;

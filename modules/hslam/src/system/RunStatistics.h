@@ -10,6 +10,8 @@
 #ifndef HSLAM_SYSTEM_RUN_STATISTICS_H
 #define HSLAM_SYSTEM_RUN_STATISTICS_H
 
+#include "tracking/AdaptiveTracking.h"
+
 #include <visp3/core/vpConfig.h>
 
 #include <mutex>
@@ -40,6 +42,8 @@ public:
   void addFrameMappingMs(double ms);
   //! Hybrid / indirect tracking of one frame: ORB matches, geometric inliers, K at the finest level.
   void addHybridFrame(int matches, int inliers, double geometricWeight);
+  //! A frame given a pose, and why its pose used the geometric term (GeometricReason::none: it did not).
+  void addPosedFrame(GeometricReason reason);
   //! Real-time mode: a frame whose tracking overlapped a loop correction in the mapping thread.
   void addTrackingMsDuringLoopCorrection(double ms);
 
@@ -49,6 +53,10 @@ public:
     double keyframeMsMedian = 0., keyframeMsP95 = 0.;
     double frameMappingMsMedian = 0.;
     double orbMatchesMedian = 0., orbInliersMedian = 0., geometricWeightMedian = 0.;
+    int posedFrames = 0;     //!< frames given a pose (addPosedFrame)
+    int geometricFrames = 0; //!< those posed with the geometric term (every reason)
+    //! Adaptive tracking: those frames by GeometricReason (largeMotion, predictionRefused, directFailed)
+    int geometricLargeMotion = 0, geometricPredictionRefused = 0, geometricDirectFailed = 0;
     int framesDuringLoopCorrection = 0;            //!< frames whose tracking overlapped a loop correction
     double trackingMsMaxDuringLoopCorrection = 0.; //!< the longest of them
   };
@@ -59,6 +67,8 @@ private:
   mutable std::mutex m_mutex;
   std::vector<double> m_trackingMs, m_initializationMs, m_keyframeMs, m_frameMappingMs;
   std::vector<double> m_orbMatches, m_orbInliers, m_geometricWeight;
+  int m_posedFrames = 0, m_geometricFrames = 0;
+  int m_geometricLargeMotion = 0, m_geometricPredictionRefused = 0, m_geometricDirectFailed = 0;
   int m_framesDuringLoopCorrection = 0;
   double m_trackingMsMaxDuringLoopCorrection = 0.;
 };

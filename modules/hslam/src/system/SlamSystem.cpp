@@ -270,6 +270,7 @@ vpHSlam::State SlamSystem::trackInitialized(const FramePtr &frame)
   }
   m_recorder.addFrame(frame->id, frame->timestamp, referenceKeyframe, out.refMc, m_segment);
   m_runStats.addTrackingMs(nowMs() - t0);
+  m_runStats.addPosedFrame(out.aligned ? m_frameTracker->lastReason() : GeometricReason::none);
   if (out.aligned) {
     MappingJob job;
     job.frame = frame;

@@ -371,6 +371,11 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.orbMatchesMedian = t.orbMatchesMedian;
   s.orbInliersMedian = t.orbInliersMedian;
   s.geometricWeightMedian = t.geometricWeightMedian;
+  s.geometricTermFrames = static_cast<unsigned int>(t.geometricFrames);
+  s.geometricTermShare = t.posedFrames > 0 ? static_cast<double>(t.geometricFrames) / t.posedFrames : 0.;
+  s.adaptiveLargeMotionFrames = static_cast<unsigned int>(t.geometricLargeMotion);
+  s.adaptivePredictionRefusedFrames = static_cast<unsigned int>(t.geometricPredictionRefused);
+  s.adaptiveDirectFailedFrames = static_cast<unsigned int>(t.geometricDirectFailed);
   s.relocalizationsAttempted = m_relocAttempts.load();
   s.relocalizationsSucceeded = m_relocSuccesses.load();
   s.descriptorKbPerKeyframe = m_snapshotDescriptorKb;

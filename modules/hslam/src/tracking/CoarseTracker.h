@@ -254,6 +254,28 @@ public:
     m_lastRmse = other.m_lastRmse;
     m_prelastRmse = other.m_prelastRmse;
   }
+  /*!
+    Mean level-0 pixel distance between where the reference's points land at \e fromMref and at \e toMref (an even
+    sample of at most kShiftSamplePoints of them; points behind either camera are left out); NaN without a reference
+    or when no point is in front of both. Adaptive tracking measures the predicted motion with it: the last frame's
+    pose against the constant-velocity prediction.
+  */
+  double meanShiftPx(const SE3d &fromMref, const SE3d &toMref) const;
+  //! Points meanShiftPx() projects at most.
+  static constexpr int kShiftSamplePoints = 256;
+  //! What trackWithHypotheses() remembers from frame to frame (the bounds of the next frame's hypotheses).
+  struct RetrackState {
+    CoarseRmsePerLevel lastRmse, prelastRmse;
+    double firstRmse = 0.;
+  };
+  //! That memory, to undo an alignment whose result is not kept (adaptive tracking runs two on a doubtful frame).
+  RetrackState retrackState() const { return {m_lastRmse, m_prelastRmse, m_firstRmse}; }
+  void restoreRetrackState(const RetrackState &state)
+  {
+    m_lastRmse = state.lastRmse;
+    m_prelastRmse = state.prelastRmse;
+    m_firstRmse = state.firstRmse;
+  }
   //! Levels of the reference, 0 before setReference().
   int numLevels() const { return m_numLevels; }
   //! Residual points (pixels of the inverse-depth map) of a level.

@@ -169,4 +169,27 @@ void CoarseTracker::dilatePixel(LevelData &L, int i, const int (&offsets)[4])
     L.weightMap[static_cast<size_t>(i)] = sumWeight / static_cast<float>(count);
   }
 }
+double CoarseTracker::meanShiftPx(const SE3d &fromMref, const SE3d &toMref) const
+{
+  if (m_numLevels < 1) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  const LevelData &L = m_levels[0];
+  const int step = std::max(1, L.numPoints / kShiftSamplePoints);
+  const Eigen::Matrix3d Rfrom = fromMref.rotationMatrix(), Rto = toMref.rotationMatrix();
+  const Eigen::Vector3d tFrom = fromMref.translation(), tTo = toMref.translation();
+  double sum = 0.;
+  int count = 0;
+  for (int k = 0; k < L.numPoints; k += step) {
+    const size_t i = static_cast<size_t>(k);
+    const Eigen::Vector3d X = L.K.unproject(L.pu[i], L.pv[i], L.pidepth[i]);
+    const Eigen::Vector3d a = Rfrom * X + tFrom, b = Rto * X + tTo;
+    if (!(a.z() > 0.) || !(b.z() > 0.)) {
+      continue;
+    }
+    sum += (L.K.project(a) - L.K.project(b)).norm();
+    ++count;
+  }
+  return count > 0 ? sum / count : std::numeric_limits<double>::quiet_NaN();
+}
 } // namespace hslam

@@ -17,7 +17,7 @@ constexpr double kDsoReferenceWidthPlusHeight = 640. + 480.;
 
 FrameTracker::FrameTracker(const vpHSlamParameters &params, bool photometricCalibration, int width, int height,
                            HybridTracker *hybrid)
-    : m_params(params), m_width(width), m_height(height), m_hybrid(hybrid),
+    : m_params(params), m_width(width), m_height(height), m_hybrid(hybrid), m_adaptive(params.tracking, width),
       m_tracker(std::make_unique<CoarseTracker>(params.tracker, photometricCalibration))
 {
 }
@@ -35,11 +35,70 @@ void FrameTracker::adoptReference(std::unique_ptr<CoarseTracker> &prepared, int 
 bool FrameTracker::estimatePose(const FramePtr &frame, CoarseMotionHistory history, bool lost, SE3d &newMref,
                                 AffineBrightness &affine, CoarseTrackingResult &result)
 {
-  if (!m_hybrid || (m_params.tracking.mode == vpHSlamParameters::trackingDirect && !lost)) {
+  const vpHSlamParameters::TrackingMode mode = m_params.tracking.mode;
+  if (!m_hybrid || (mode == vpHSlamParameters::trackingDirect && !lost)) {
+    m_lastReason = GeometricReason::none;
     return m_tracker->trackWithHypotheses(*frame, history, newMref, affine, result);
   }
-  // Hybrid / indirect tracking, or a lost camera with direct tracking: the joint step, whose ORB inliers confirm a
-  // relocalised pose.
+  if (lost) {
+    // A lost camera with direct or adaptive tracking: the joint step, whose ORB inliers confirm a relocalised pose.
+    return estimateJoint(frame, history, GeometricReason::lost, newMref, affine, result);
+  }
+  if (mode == vpHSlamParameters::trackingAdaptive) {
+    return estimateAdaptive(frame, history, newMref, affine, result);
+  }
+  return estimateJoint(frame, history, GeometricReason::always, newMref, affine, result);
+}
+
+bool FrameTracker::estimateAdaptive(const FramePtr &frame, const CoarseMotionHistory &history, SE3d &newMref,
+                                    AffineBrightness &affine, CoarseTrackingResult &result)
+{
+  const SE3d predicted = CoarseTracker::predictConstantVelocity(history);
+  const double shiftPx = history.valid ? m_tracker->meanShiftPx(history.lastMref, predicted) : 0.;
+  GeometricReason reason = m_adaptive.beforeDirect(history.valid, shiftPx);
+  if (reason != GeometricReason::none) {
+    return estimateJoint(frame, history, reason, newMref, affine, result);
+  }
+  // The direct alignment first; its memory of the residuals is undone when its pose is not the one kept, so that the
+  // joint step's hypotheses are bounded as they would have been.
+  const CoarseTracker::RetrackState before = m_tracker->retrackState();
+  SE3d directMref = newMref;
+  AffineBrightness directAffine = affine;
+  CoarseTrackingResult directResult;
+  const bool direct = m_tracker->trackWithHypotheses(*frame, history, directMref, directAffine, directResult);
+  reason = AdaptiveTrackingPolicy::afterDirect(direct, directResult);
+  VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": adaptive, predicted shift " << shiftPx << " px, direct "
+                                           << (direct ? "ok" : "failed") << " after " << directResult.hypothesesTried
+                                           << " hypotheses -> " << geometricReasonName(reason));
+  if (reason == GeometricReason::none) {
+    m_lastReason = reason;
+    newMref = directMref;
+    affine = directAffine;
+    result = directResult;
+    publishMatches(false);
+    return true;
+  }
+  const CoarseTracker::RetrackState afterDirect = m_tracker->retrackState();
+  m_tracker->restoreRetrackState(before);
+  if (estimateJoint(frame, history, reason, newMref, affine, result)) {
+    return true;
+  }
+  if (!direct) {
+    return false;
+  }
+  // The joint step failed where the direct alignment had succeeded (too few ORB inliers, say): the direct pose stands.
+  m_tracker->restoreRetrackState(afterDirect);
+  m_lastReason = GeometricReason::none;
+  newMref = directMref;
+  affine = directAffine;
+  result = directResult;
+  return true;
+}
+
+bool FrameTracker::estimateJoint(const FramePtr &frame, CoarseMotionHistory history, GeometricReason reason,
+                                 SE3d &newMref, AffineBrightness &affine, CoarseTrackingResult &result)
+{
+  m_lastReason = reason;
   const bool indirectOnly = m_params.tracking.mode == vpHSlamParameters::trackingIndirect;
   m_hybrid->extract(frame->raw);
   m_hybrid->indirectStep(m_tracker->referenceFeatures(), CoarseTracker::predictConstantVelocity(history), m_indirect);
@@ -65,8 +124,14 @@ bool FrameTracker::estimatePose(const FramePtr &frame, CoarseMotionHistory histo
   if (success) {
     m_hybridSteps.push_back({m_indirect.matches, m_indirect.inliers, result.geometricWeight});
   }
+  publishMatches(success && m_indirect.usable);
+  return success;
+}
+
+void FrameTracker::publishMatches(bool success)
+{
   std::vector<vpImagePoint> matched;
-  if (success && m_indirect.usable) {
+  if (success) {
     matched.reserve(m_indirect.term.uv.size());
     for (const Eigen::Vector2d &uv : m_indirect.term.uv) {
       matched.emplace_back(uv.y(), uv.x());
@@ -74,7 +139,6 @@ bool FrameTracker::estimatePose(const FramePtr &frame, CoarseMotionHistory histo
   }
   std::lock_guard<std::mutex> lock(m_matchesMutex);
   m_lastMatches.swap(matched);
-  return success;
 }
 
 bool FrameTracker::keyframeNeeded(const FramePtr &frame, const CoarseTrackingResult &result, bool forced)

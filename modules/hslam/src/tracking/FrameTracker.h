@@ -23,6 +23,7 @@
 #include "map/AffineBrightness.h"
 #include "map/Frame.h"
 #include "math/SE3.h"
+#include "tracking/AdaptiveTracking.h"
 #include "tracking/CoarseTracker.h"
 #include "tracking/HybridTracker.h"
 
@@ -62,14 +63,17 @@ public:
   int referenceKeyframe() const { return m_referenceKeyframe; }
 
   /*!
-    Pose of \e frame against the reference: direct (DSO hypotheses), indirect (ORB matches, pose-only) or hybrid
-    (indirect step, then the joint optimisation seeded by it), per Tracking::mode. \e lost: the camera is being
-    relocalised (with direct tracking the joint step then runs too: its ORB inliers confirm a relocalised pose).
+    Pose of \e frame against the reference: direct (DSO hypotheses), indirect (ORB matches, pose-only), hybrid
+    (indirect step, then the joint optimisation seeded by it) or adaptive (direct, hybrid when AdaptiveTrackingPolicy
+    says so), per Tracking::mode. \e lost: the camera is being relocalised (with direct or adaptive tracking the joint
+    step then runs too: its ORB inliers confirm a relocalised pose).
   */
   bool estimatePose(const FramePtr &frame, CoarseMotionHistory history, bool lost, SE3d &newMref,
                     AffineBrightness &affine, CoarseTrackingResult &result);
   //! The last frame's indirect step (hybrid / indirect tracking, or a lost camera).
   const IndirectStepResult &indirect() const { return m_indirect; }
+  //! Why the last frame's pose used the geometric term (GeometricReason::none: direct alignment only).
+  GeometricReason lastReason() const { return m_lastReason; }
 
   /*!
     DSO's keyframe rule for a tracked \e frame (its affine set): weighted optical flow and brightness change, or the
@@ -92,9 +96,20 @@ public:
   std::vector<vpImagePoint> descriptorMatches() const;
 
 private:
+  //! Adaptive tracking of a frame that is not lost (see AdaptiveTracking.h).
+  bool estimateAdaptive(const FramePtr &frame, const CoarseMotionHistory &history, SE3d &newMref,
+                        AffineBrightness &affine, CoarseTrackingResult &result);
+  //! The indirect step, then the joint (or, indirect mode, geometric) pose; records the step as \e reason's.
+  bool estimateJoint(const FramePtr &frame, CoarseMotionHistory history, GeometricReason reason, SE3d &newMref,
+                     AffineBrightness &affine, CoarseTrackingResult &result);
+  //! The pixels the display shows as matched (none for a frame tracked directly).
+  void publishMatches(bool success);
+
   vpHSlamParameters m_params;
   int m_width, m_height;
   HybridTracker *m_hybrid;
+  AdaptiveTrackingPolicy m_adaptive;
+  GeometricReason m_lastReason = GeometricReason::none;
   std::unique_ptr<CoarseTracker> m_tracker;
   int m_referenceKeyframe = -1;       //!< keyframe id of m_tracker's reference
   AffineBrightness m_referenceAffine; //!< brightness of the reference when it was set

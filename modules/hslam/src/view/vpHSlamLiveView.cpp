@@ -217,8 +217,11 @@ void vpHSlamLiveView::draw(const vpHSlam &slam, unsigned int frameIndex, double 
     position.set_j(position.get_j() + font().getMeasure(text).get_j());
   };
   write(status.str(), statusColour);
-  if (slam.getParameters().tracking.mode != vpHSlamParameters::trackingDirect) {
-    write("  + orb " + std::to_string(matches.size()), kMatchColour);
+  const vpHSlamParameters::TrackingMode mode = slam.getParameters().tracking.mode;
+  if (mode == vpHSlamParameters::trackingAdaptive && matches.empty()) {
+    write("  direct", statusColour); // adaptive tracking kept the photometric pose alone for this frame
+  } else if (mode != vpHSlamParameters::trackingDirect) {
+    write("  + orb " + std::to_string(matches.size()), kMatchColour); // the geometric term was used
   }
   if (!hint.empty()) {
     write("  " + hint, statusColour);

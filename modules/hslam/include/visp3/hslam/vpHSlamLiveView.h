@@ -27,10 +27,11 @@ class vpHSlam;
   by inverse depth (near red, through yellow and green, far blue; the scale spans the 5th to 95th percentile of the
   visible points), the keypoints the last frame matched by ORB descriptor (vpHSlam::getDescriptorMatches(), hybrid
   and indirect tracking) as small magenta crosses, and a status line (frame, state, frame rate, active points,
-  keyframes, in magenta "+ orb N" with the number of those matches unless tracking is direct, and an optional hint
-  such as the keys of the program). Right: a top view of the world (x right, z up in the picture) with the
-  trajectory of every tracked frame (green), the keyframes (blue squares, filled while in the optimisation window)
-  and the current camera with its viewing direction (red).
+  keyframes, in magenta "+ orb N" with the number of those matches unless tracking is direct (adaptive tracking: only
+  for a frame that used them, "direct" in white otherwise), and an optional hint such as the keys of the program).
+  Right: a top view of the world (x right, z up in the picture) with the trajectory of every tracked frame (green), the
+  keyframes (blue squares, filled while in the optimisation window) and the current camera with its viewing direction
+  (red).
 
   Drawing only: no window is opened here, so the same code serves live programs, tests (an off-screen image) and
   pictures. The canvas is resized to (image width + getTopViewWidth()) x image height.

@@ -54,7 +54,8 @@ public:
   enum TrackingMode {
     trackingDirect,   //!< photometric error only (DSO's coarse tracker; no descriptors are computed)
     trackingIndirect, //!< reprojection error of ORB matches only (the photometric side still estimates (a, b))
-    trackingHybrid    //!< both, weighted by the paper's eq. 4
+    trackingHybrid,   //!< both, weighted by the paper's eq. 4
+    trackingAdaptive  //!< per frame: direct, or hybrid when the motion makes the photometric solution doubtful
   };
 
   //! Point selection on new keyframes (DSO PixelSelector; FAST corners come first in their cells).
@@ -172,6 +173,9 @@ public:
                                     //!< keyframes (found the camera after 40-frame covers where BoW candidates fail)
     bool seedFromStoredMap = true;  //!< a window left without points takes two agreeing PnP fixes in the stored map
                                     //!< and re-activates the stored points seen there (slam / vo-reuse modes)
+    //! Adaptive tracking: a frame whose predicted motion moves the reference's points by more than this on average
+    //! (pixels at 640 px width, scaled with the width) is tracked with the geometric term (docs/hybrid-tracking.md)
+    double adaptiveMotionPx = 20.;
   };
 
   /*!
@@ -206,11 +210,11 @@ public:
     keyframes, ORB matching of the two sides' points, Sim(3) RANSAC (defaults: ORB-SLAM2's LoopClosing).
   */
   struct Loop {
-    int consistency = 3;                   //!< consecutive keyframes whose candidates agree before a loop is verified
-    int minKeyframesBetween = 10;          //!< keyframes after the map's start (or the last loop) before detecting
-    int matchMaxDistance = 50;             //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
-    double matchRatio = 0.75;              //!< best distance below this times the second best (ORB-SLAM loop search)
-    int minMatches = 20;                   //!< ORB matches needed to try the Sim(3) (ORB-SLAM: 20)
+    int consistency = 3;          //!< consecutive keyframes whose candidates agree before a loop is verified
+    int minKeyframesBetween = 10; //!< keyframes after the map's start (or the last loop) before detecting
+    int matchMaxDistance = 50;    //!< Hamming distance accepted at most (ORB-SLAM TH_LOW)
+    double matchRatio = 0.75;     //!< best distance below this times the second best (ORB-SLAM loop search)
+    int minMatches = 20;          //!< ORB matches needed to try the Sim(3) (ORB-SLAM: 20)
     //! Sim(3) inliers needed to accept a loop, after guided matching (ORB-SLAM: 40 after its projection search). 20
     //! let a wrong loop through on Tsukuba played there and back (25 inliers, 26 degrees); right ones had 67-552.
     int minInliers = 40;
