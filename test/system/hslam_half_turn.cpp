@@ -2,7 +2,8 @@
 // adaptive-tracking benchmark (tutorials/hslam-adaptive-benchmark.sh): one run with the given pivot, tracking mode
 // and point budget, deterministic, printed as one line of key=value pairs.
 //
-//   hslam_half_turn --pivot 0.3 [--tracking-mode adaptive] [--budget 500] [--motion-px PX] [--save PREFIX] [--debug]
+//   hslam_half_turn --pivot 0.3 [--tracking-mode adaptive] [--budget 500] [--motion-px PX] [--save PREFIX]
+//   [--debug]
 //
 // Output: pivot, mode, budget, frames, tracked, lost, segments, ate (Sim(3)-aligned, metres, every frame fed),
 // tracking_ms_median and geometric_share (frames whose pose used the geometric term, over the frames tracked).
@@ -38,9 +39,10 @@ int main(int argc, char **argv)
     } else if (arg == "--budget" && k + 1 < argc) {
       budget = std::atoi(argv[++k]);
     } else {
-      std::cerr << "usage: " << argv[0]
-                << " --pivot METRES [--tracking-mode MODE] [--budget POINTS] [--motion-px PX] [--save PREFIX]"
-                   " [--debug]\n";
+      std::cerr
+          << "usage: " << argv[0]
+          << " --pivot METRES [--tracking-mode MODE] [--budget POINTS] [--motion-px PX] [--save PREFIX]"
+             " [--debug]\n";
       return EXIT_FAILURE;
     }
   }

@@ -106,12 +106,18 @@ TEST(AdaptiveTrackingPolicy, largePredictedMotionBringsTheGeometricTerm)
 
 TEST(AdaptiveTrackingPolicy, doubtfulDirectOutcomeBringsTheGeometricTerm)
 {
+  vpHSlamParameters::Tracking p;
+  p.adaptiveMotionPx = 20.;
+  const AdaptiveTrackingPolicy policy(p, 640);
   CoarseTrackingResult result;
   result.hypothesesTried = 1;
-  EXPECT_EQ(AdaptiveTrackingPolicy::afterDirect(true, result), GeometricReason::none);
+  EXPECT_EQ(policy.afterDirect(true, result, 3.), GeometricReason::none);
+  EXPECT_EQ(policy.afterDirect(true, result, std::numeric_limits<double>::quiet_NaN()), GeometricReason::none);
+  // The motion found is larger than the threshold although none was predicted (a turn that starts suddenly).
+  EXPECT_EQ(policy.afterDirect(true, result, 25.), GeometricReason::largeMotion);
   result.hypothesesTried = 3; // the constant-velocity prediction was not good enough
-  EXPECT_EQ(AdaptiveTrackingPolicy::afterDirect(true, result), GeometricReason::predictionRefused);
-  EXPECT_EQ(AdaptiveTrackingPolicy::afterDirect(false, result), GeometricReason::directFailed);
+  EXPECT_EQ(policy.afterDirect(true, result, 3.), GeometricReason::predictionRefused);
+  EXPECT_EQ(policy.afterDirect(false, result, 3.), GeometricReason::directFailed);
   EXPECT_STREQ(geometricReasonName(GeometricReason::none), "direct");
   EXPECT_STREQ(geometricReasonName(GeometricReason::largeMotion), "large motion");
 }

@@ -41,13 +41,17 @@ GeometricReason AdaptiveTrackingPolicy::beforeDirect(bool historyValid, double p
   return GeometricReason::none;
 }
 
-GeometricReason AdaptiveTrackingPolicy::afterDirect(bool success, const CoarseTrackingResult &result)
+GeometricReason AdaptiveTrackingPolicy::afterDirect(bool success, const CoarseTrackingResult &result,
+                                                    double measuredShiftPx) const
 {
   if (!success) {
     return GeometricReason::directFailed;
   }
   if (result.hypothesesTried > 1) {
     return GeometricReason::predictionRefused;
+  }
+  if (std::isfinite(measuredShiftPx) && measuredShiftPx > m_motionThresholdPx) {
+    return GeometricReason::largeMotion;
   }
   return GeometricReason::none;
 }

@@ -18,8 +18,10 @@
     (GeometricReason::largeMotion), and the direct alignment does not run;
   - after it: the alignment failed (GeometricReason::directFailed), or the constant-velocity prediction did not reach
     DSO's "good enough" residual and other motion hypotheses were tried (GeometricReason::predictionRefused: the
-    motion changed, the photometric solution is doubtful). The joint step then runs from the same start, and its pose
-    is kept when it succeeds; otherwise the direct one (when it succeeded) stands.
+    motion changed, the photometric solution is doubtful), or the pose it found moved the points by more than the
+    threshold from the last frame's (GeometricReason::largeMotion: a motion that starts suddenly, such as the first
+    frame of a fast turn, which the prediction did not see coming). The joint step then runs from the same start, and
+    its pose is kept when it succeeds; otherwise the direct one (when it succeeded) stands.
   A frame given neither reason keeps the direct pose, exactly DSO's, and describes no keypoint.
 
   Owns: nothing but the thresholds; the counts go to the run statistics with each frame's hybrid step.
@@ -64,9 +66,10 @@ public:
   GeometricReason beforeDirect(bool historyValid, double predictedShiftPx) const;
   /*!
     After it: GeometricReason::directFailed when \e success is false, predictionRefused when \e result tried more
-    than one hypothesis, none otherwise.
+    than one hypothesis, largeMotion when \e measuredShiftPx (CoarseTracker::meanShiftPx of the last pose and the
+    direct one; NaN when unknown) is above the threshold, none otherwise.
   */
-  static GeometricReason afterDirect(bool success, const CoarseTrackingResult &result);
+  GeometricReason afterDirect(bool success, const CoarseTrackingResult &result, double measuredShiftPx) const;
   //! The motion threshold at this image width, pixels.
   double motionThresholdPx() const { return m_motionThresholdPx; }
 

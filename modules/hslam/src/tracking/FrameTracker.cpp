@@ -66,10 +66,12 @@ bool FrameTracker::estimateAdaptive(const FramePtr &frame, const CoarseMotionHis
   AffineBrightness directAffine = affine;
   CoarseTrackingResult directResult;
   const bool direct = m_tracker->trackWithHypotheses(*frame, history, directMref, directAffine, directResult);
-  reason = AdaptiveTrackingPolicy::afterDirect(direct, directResult);
+  const double measuredPx = direct && history.valid ? m_tracker->meanShiftPx(history.lastMref, directMref) : 0.;
+  reason = m_adaptive.afterDirect(direct, directResult, measuredPx);
   VP_HSLAM_LOG(vpHSlamLog::debug, "frame " << frame->id << ": adaptive, predicted shift " << shiftPx << " px, direct "
                                            << (direct ? "ok" : "failed") << " after " << directResult.hypothesesTried
-                                           << " hypotheses -> " << geometricReasonName(reason));
+                                           << " hypotheses, shift " << measuredPx << " px -> "
+                                           << geometricReasonName(reason));
   if (reason == GeometricReason::none) {
     m_lastReason = reason;
     newMref = directMref;
