@@ -13,7 +13,8 @@
 #           least the better mode's (the issue's acceptance), else "NO"
 #   time    K = 1: median over the budgets of each run's median tracking time per frame (ms), adaptive / direct, and
 #           the share of frames adaptive posed with the geometric term (geometric_term_share)
-#   pivot   the half turn (build/test/hslam_half_turn): the same columns as stride
+#   pivot   the half turn (build/test/hslam_half_turn): the same columns as stride, and the runs above 0.1 m (the scale
+#           was lost in the turn: a run ends either near 0.01 m or near 0.3 m, so the median alone is a coin toss)
 # A failed run prints a line naming its log; the benchmark carries on and exits with status 1.
 # Environment: DATA (default <repo>/../shared/data), OUT (default /tmp/hslam-adaptive-bench), SEQUENCES, STRIDES
 # (default "1 2 3 4 5 6"), PIVOTS (default "0.25 0.3 0.35"), BUDGETS (default 475 480 ... 525, 11 runs), MODES
@@ -68,11 +69,15 @@ range_of() { # min-max of the numbers given (nan ignored)
   printf "%s\n" "$@" | grep -v nan | sort -g | awk 'NR == 1 { lo = $1 } { hi = $1 } END { if (NR) printf "%.3g-%.3g", lo, hi; else printf "-" }'
 }
 
-print_cell() { # mode: "median [range] tracked"
+print_cell() { # mode: "median [range] tracked", and with a second argument the runs whose ATE exceeds it
   local mode="$1"
   # shellcheck disable=SC2086
   printf "  %-8s %8.4f [%s] %s" "$mode" "$(median ${row_ates[$mode]})" "$(range_of ${row_ates[$mode]})" \
     "${row_tracked[$mode]}"
+  if [[ $# -ge 2 ]]; then
+    # shellcheck disable=SC2086
+    printf " (%s above %s)" "$(printf "%s\n" ${row_ates[$mode]} | awk -v t="$2" '$1 != "nan" && $1 + 0 > t' | wc -l)" "$2"
+  fi
 }
 
 available=()
@@ -159,7 +164,7 @@ if has_section pivot; then
         done
         row_ates[$mode]="${ates[*]}"
         row_tracked[$mode]="${fewest:-0}"
-        line+="$(print_cell "$mode")"
+        line+="$(print_cell "$mode" 0.1)"
       done
       echo "$line$(row_verdict)"
     done

@@ -454,11 +454,13 @@ TEST(Parameters, ModeNames)
   EXPECT_EQ(vpHSlamParameters::modeName(vpHSlamParameters::modeSlam), "slam");
   ExpectError([] { vpHSlamParameters::parseMode("SLAM"); }, vpHSlamException::invalidArgument, {"SLAM"});
   for (vpHSlamParameters::TrackingMode mode :
-       {vpHSlamParameters::trackingDirect, vpHSlamParameters::trackingIndirect, vpHSlamParameters::trackingHybrid}) {
+       {vpHSlamParameters::trackingDirect, vpHSlamParameters::trackingIndirect, vpHSlamParameters::trackingHybrid,
+        vpHSlamParameters::trackingAdaptive}) {
     EXPECT_EQ(vpHSlamParameters::parseTrackingMode(vpHSlamParameters::trackingModeName(mode)), mode);
   }
   EXPECT_EQ(vpHSlamParameters::trackingModeName(vpHSlamParameters::trackingHybrid), "hybrid");
-  EXPECT_EQ(vpHSlamParameters().tracking.mode, vpHSlamParameters::trackingDirect);
+  EXPECT_EQ(vpHSlamParameters::trackingModeName(vpHSlamParameters::trackingAdaptive), "adaptive");
+  EXPECT_EQ(vpHSlamParameters().tracking.mode, vpHSlamParameters::trackingAdaptive);
   ExpectError([] { vpHSlamParameters::parseTrackingMode("dso"); }, vpHSlamException::invalidArgument, {"dso"});
 }
 

@@ -197,6 +197,11 @@ TEST(SystemGlobalMap, TurnInPlaceIsSeededAgainFromTheStoredMap)
   // again only from frame 347 (99 degrees on the way back), 32 frames later: longer than the default relocalisation
   // timeout (1 s). Before, it was lost on the way back (frame 356) and placed 2 frames later, ATE 0.070 m.
   params.tracking.relocalizationTimeout = 2.;
+  // Measured with direct tracking, the default then. With adaptive tracking (the geometric term on every frame of the
+  // turn) the window is seeded and the camera placed again all the same (1 segment, 2 relocalisations, 16 frames
+  // lost), but the run ends at 0.21 m: the scale of the way back differs. Without points on a depth prior this
+  // scenario is a lottery for either tracker (docs/hybrid-tracking.md, "Adaptive tracking").
+  params.tracking.mode = vpHSlamParameters::trackingDirect;
   const TurnOutcome o = runTurnAndPrint(params, "seeded from the stored map");
   // One map: back as soon as the stored keyframes are in view (32 frames lost measured).
   EXPECT_EQ(o.stats.segments, 1u);

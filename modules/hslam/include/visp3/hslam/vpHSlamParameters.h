@@ -140,13 +140,14 @@ public:
     Hybrid pose tracking: descriptor sharing, ORB matching of the map into the new frame, joint photometric and
     geometric optimisation, relocalisation (paper sections 3.1, 3.2). Matching defaults are ORB-SLAM2's tracking
     values; the others were measured on the shared sequences (docs/hybrid-tracking.md).
-    The default tracking mode is direct: measured on the shared sequences (docs/hybrid-tracking.md,
-    tutorials/hslam-hybrid-benchmark.sh),
-    hybrid is not yet as accurate as direct nor more robust to large motion, so it is not what users get until it
-    is. Relocalisation needs hybrid or indirect tracking (descriptors).
+    The default tracking mode is adaptive: the direct alignment, and the joint one when the motion makes the
+    photometric solution doubtful (tracking/AdaptiveTracking.h). Under ordinary motion hybrid is no more accurate
+    than direct at about 3x the cost; under large motion (skipped frames, a hand-held turn about a near pivot) it can
+    be far better (docs/hybrid-tracking.md, tutorials/hslam-adaptive-benchmark.sh). Relocalisation needs descriptors:
+    any mode but direct, or direct in vo-reuse and slam.
   */
   struct Tracking {
-    TrackingMode mode = trackingDirect; //!< direct, indirect or hybrid (see above why direct is the default)
+    TrackingMode mode = trackingAdaptive; //!< direct, indirect, hybrid or adaptive (see above why adaptive)
     int frameFeatures = 1000;           //!< FAST corners described per new frame for matching (ORB-SLAM2: 1000)
     int frameFastThreshold = 7;         //!< FAST threshold on new frames, intensity units (as features.fastThreshold)
     double matchRadiusPx = 15.;         //!< search radius around a predicted pixel, pixels (ORB-SLAM2: 15 at 640x480)
