@@ -39,10 +39,9 @@ int main(int argc, char **argv)
     } else if (arg == "--budget" && k + 1 < argc) {
       budget = std::atoi(argv[++k]);
     } else {
-      std::cerr
-          << "usage: " << argv[0]
-          << " --pivot METRES [--tracking-mode MODE] [--budget POINTS] [--motion-px PX] [--save PREFIX]"
-             " [--debug]\n";
+      std::cerr << "usage: " << argv[0]
+                << " --pivot METRES [--tracking-mode MODE] [--budget POINTS] [--motion-px PX] [--save PREFIX]"
+                   " [--debug]\n";
       return EXIT_FAILURE;
     }
   }

@@ -148,13 +148,13 @@ public:
   */
   struct Tracking {
     TrackingMode mode = trackingAdaptive; //!< direct, indirect, hybrid or adaptive (see above why adaptive)
-    int frameFeatures = 1000;           //!< FAST corners described per new frame for matching (ORB-SLAM2: 1000)
-    int frameFastThreshold = 7;         //!< FAST threshold on new frames, intensity units (as features.fastThreshold)
-    double matchRadiusPx = 15.;         //!< search radius around a predicted pixel, pixels (ORB-SLAM2: 15 at 640x480)
-    int matchMaxDistance = 100;         //!< Hamming distance accepted at most (ORB-SLAM2 TH_HIGH)
-    double matchRatio = 0.9;            //!< best distance must be below this times the second best (ORB-SLAM2)
-    int minMatchesBeforeWidening = 20;  //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
-    int minGeometricInliers = 10;       //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
+    int frameFeatures = 1000;             //!< FAST corners described per new frame for matching (ORB-SLAM2: 1000)
+    int frameFastThreshold = 7;           //!< FAST threshold on new frames, intensity units (as features.fastThreshold)
+    double matchRadiusPx = 15.;           //!< search radius around a predicted pixel, pixels (ORB-SLAM2: 15 at 640x480)
+    int matchMaxDistance = 100;           //!< Hamming distance accepted at most (ORB-SLAM2 TH_HIGH)
+    double matchRatio = 0.9;              //!< best distance must be below this times the second best (ORB-SLAM2)
+    int minMatchesBeforeWidening = 20;    //!< fewer matches: search again with twice the radius (ORB-SLAM2: 20)
+    int minGeometricInliers = 10;         //!< inliers the indirect step needs to give a pose (ORB-SLAM2: 10)
     //! Paper eq. 3: weigh each match of the joint optimisation by its point's inverse-depth information over the
     //! largest (hybrid tracking). Off: measured no better than equal weights (docs/hybrid-tracking.md)
     bool geometricDepthWeights = false;
