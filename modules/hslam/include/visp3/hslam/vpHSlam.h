@@ -212,8 +212,9 @@ public:
   std::vector<vpColVector> getActivePoints(std::vector<double> *depths = nullptr) const;
   /*!
     Pixels (rectified image of the last frame, see getRectifiedImage()) of the keypoints the last frame matched to
-    map points by ORB descriptor and kept as geometric inliers (hybrid and indirect tracking; empty in direct mode
-    or when the frame was not tracked).
+    map points by ORB descriptor and kept as geometric inliers (hybrid and indirect tracking, and adaptive tracking on
+    the frames that used the geometric term; empty in direct mode, for a frame adaptive tracking kept direct, or when
+    the frame was not tracked).
   */
   std::vector<vpImagePoint> getDescriptorMatches() const;
 
