@@ -24,7 +24,8 @@
     its pose is kept when it succeeds; otherwise the direct one (when it succeeded) stands.
   A frame given neither reason keeps the direct pose, exactly DSO's, and describes no keypoint.
 
-  Owns: nothing but the thresholds; the counts go to the run statistics with each frame's hybrid step.
+  Owns: nothing but the threshold. FrameTracker applies the decision and keeps each frame's reason (lastReason()),
+  which SlamSystem counts in the run statistics for every posed frame.
   Threading: stateless after construction; the tracking thread.
 */
 #ifndef HSLAM_TRACKING_ADAPTIVE_TRACKING_H
