@@ -66,6 +66,16 @@ protected:
     return h;
   }
 
+  //! The scene rendered at the camera whose reference-to-camera pose is \e newMref, as a tracking frame.
+  FramePtr frameAt(const SE3d &newMref) const
+  {
+    vpImage<unsigned char> I;
+    scene.renderAtPose(toVpHomogeneousMatrix(newMref * toSE3(scene.getPose(0).inverse())).inverse(), I);
+    auto frame = std::make_shared<Frame>();
+    hslam_test::makeFrameFromImage(I, scene, params.tracker, *frame);
+    return frame;
+  }
+
   //! Track \e frame with the motion history \e h; its pose error against \e truth.
   bool track(const FramePtr &frame, const CoarseMotionHistory &h, const SE3d &truth, double &dt, double &dr)
   {
@@ -160,10 +170,7 @@ TEST_F(AdaptiveTrackingTest, largeRotationBringsTheGeometricTerm)
   // the new frame at 12. The predicted motion moves the points by about 55 px: the geometric term is used at once.
   const SE3d at2 = hslam_test::groundTruthNewMref(scene, 0, 2);
   const SE3d last = turnedBy(at2, 6.), truth = turnedBy(at2, 12.);
-  vpImage<unsigned char> I;
-  scene.renderAtPose(toVpHomogeneousMatrix(truth * toSE3(scene.getPose(0).inverse())).inverse(), I);
-  auto frame = std::make_shared<Frame>();
-  hslam_test::makeFrameFromImage(I, scene, params.tracker, *frame);
+  const FramePtr frame = frameAt(truth);
   double dt = 0., dr = 0.;
   ASSERT_TRUE(track(frame, history(at2, last), truth, dt, dr));
   EXPECT_EQ(tracker->lastReason(), GeometricReason::largeMotion);
@@ -182,10 +189,7 @@ TEST_F(AdaptiveTrackingTest, unpredictedTurnIsCheckedWithTheGeometricTerm)
   // (or fails), and the frame is tracked again with the geometric term.
   const SE3d at1 = hslam_test::groundTruthNewMref(scene, 0, 1), at2 = hslam_test::groundTruthNewMref(scene, 0, 2);
   const SE3d truth = turnedBy(hslam_test::groundTruthNewMref(scene, 0, 3), 5.);
-  vpImage<unsigned char> I;
-  scene.renderAtPose(toVpHomogeneousMatrix(truth * toSE3(scene.getPose(0).inverse())).inverse(), I);
-  auto frame = std::make_shared<Frame>();
-  hslam_test::makeFrameFromImage(I, scene, params.tracker, *frame);
+  const FramePtr frame = frameAt(truth);
   double dt = 0., dr = 0.;
   ASSERT_TRUE(track(frame, history(at1, at2), truth, dt, dr));
   EXPECT_TRUE(tracker->lastReason() == GeometricReason::predictionRefused ||

@@ -7,8 +7,9 @@
   3.2; DSO FullSystem::trackNewCoarse and the keyframe rule of addActiveFrame).
 
   Owns: the active CoarseTracker and what its reference is (keyframe id, brightness and exposure when it was set),
-  the indirect step of the current frame, the brightness of the last tracked frame, the frames since the last
-  keyframe request, and the descriptor-matched pixels of the last frame (display).
+  the indirect step of the current frame, the adaptive-tracking policy and why the last frame used the geometric term
+  (lastReason()), the brightness of the last tracked frame, the frames since the last keyframe request, and the
+  descriptor-matched pixels of the last frame (display).
   Is given: the frame, its motion history (TrackingStateMachine), and the reference the back end prepared
   (adoptReference(), swapped in by the conductor); the HybridTracker (keypoints, indirect step) is the conductor's,
   shared with relocalisation and localisation, null in direct mode without relocalisation.
