@@ -49,6 +49,9 @@ constexpr int kMinMipSize = 8;
 // Grazing rays: the cosine used for the footprint is bounded to keep the mip level finite.
 constexpr double kMinCosine = 0.05;
 constexpr double kRayEpsilon = 1e-12;
+// A picture's centre must be this close to a wall (metres); one texel of a picture is at most this wide.
+constexpr double kPictureOnWallMetres = 1e-3;
+constexpr double kPictureTexelMetres = 2.5e-3;
 
 inline int mirrorIndex(int i, int n)
 {
@@ -80,33 +83,12 @@ void SyntheticRenderer::load(const std::string &imagesDir)
     } catch (const vpHSlamException &) {
       continue; // an unreadable photograph is replaced like a missing one
     }
-    Texture T;
     MipLevel L0;
     L0.width = static_cast<int>(I.getWidth());
     L0.height = static_cast<int>(I.getHeight());
     L0.scale = 1.0;
     L0.pixels.assign(I.bitmap, I.bitmap + I.getSize());
-    T.levels.push_back(std::move(L0));
-    // Box-filtered pyramid (2x2 mean, clamped at odd borders).
-    while (std::min(T.levels.back().width, T.levels.back().height) / 2 >= kMinMipSize) {
-      const MipLevel &P = T.levels.back();
-      MipLevel N;
-      N.width = P.width / 2;
-      N.height = P.height / 2;
-      N.scale = 0.5 * P.scale;
-      N.pixels.resize(static_cast<size_t>(N.width) * N.height);
-      for (int y = 0; y < N.height; ++y) {
-        const int y0 = 2 * y, y1 = std::min(2 * y + 1, P.height - 1);
-        for (int x = 0; x < N.width; ++x) {
-          const int x0 = 2 * x, x1 = std::min(2 * x + 1, P.width - 1);
-          N.pixels[static_cast<size_t>(y) * N.width + x] =
-              0.25f *
-              (P.pixels[static_cast<size_t>(y0) * P.width + x0] + P.pixels[static_cast<size_t>(y0) * P.width + x1] +
-               P.pixels[static_cast<size_t>(y1) * P.width + x0] + P.pixels[static_cast<size_t>(y1) * P.width + x1]);
-        }
-      }
-      T.levels.push_back(std::move(N));
-    }
+    Texture T = makeTexture(std::move(L0));
     loadedIndex[i] = static_cast<int>(m_textures.size());
     m_textures.push_back(std::move(T));
     m_textureFiles.push_back(path);
@@ -147,6 +129,131 @@ void SyntheticRenderer::load(const std::string &imagesDir)
       }
     }
   }
+}
+
+SyntheticRenderer::Texture SyntheticRenderer::makeTexture(MipLevel level0)
+{
+  Texture T;
+  T.levels.push_back(std::move(level0));
+  // Box-filtered pyramid (2x2 mean, clamped at odd borders).
+  while (std::min(T.levels.back().width, T.levels.back().height) / 2 >= kMinMipSize) {
+    const MipLevel &P = T.levels.back();
+    MipLevel N;
+    N.width = P.width / 2;
+    N.height = P.height / 2;
+    N.scale = 0.5 * P.scale;
+    N.pixels.resize(static_cast<size_t>(N.width) * N.height);
+    for (int y = 0; y < N.height; ++y) {
+      const int y0 = 2 * y, y1 = std::min(2 * y + 1, P.height - 1);
+      for (int x = 0; x < N.width; ++x) {
+        const int x0 = 2 * x, x1 = std::min(2 * x + 1, P.width - 1);
+        N.pixels[static_cast<size_t>(y) * N.width + x] =
+            0.25f *
+            (P.pixels[static_cast<size_t>(y0) * P.width + x0] + P.pixels[static_cast<size_t>(y0) * P.width + x1] +
+             P.pixels[static_cast<size_t>(y1) * P.width + x0] + P.pixels[static_cast<size_t>(y1) * P.width + x1]);
+      }
+    }
+    T.levels.push_back(std::move(N));
+  }
+  return T;
+}
+
+void SyntheticRenderer::pictureAxes(const double centre[3], double xAxis[3], double yAxis[3], double zAxis[3])
+{
+  // The wall: x or z at a bound of the room. Its inward-facing picture has y down (the world's y) and z along the
+  // wall's outward normal, so x = y x z reads left to right for a viewer inside the room.
+  int axis = -1;
+  double normal = 0.;
+  for (int a : {0, 2}) {
+    if (std::fabs(centre[a] - kRoomLo[a]) <= kPictureOnWallMetres) {
+      axis = a;
+      normal = -1.;
+    } else if (std::fabs(centre[a] - kRoomHi[a]) <= kPictureOnWallMetres) {
+      axis = a;
+      normal = 1.;
+    }
+  }
+  if (axis < 0 || !std::isfinite(centre[1])) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "synthetic scene: a picture's centre must lie on one of the four walls (x = -2.5 or 2.5, "
+                           "or z = -2 or 3.5, metres)");
+  }
+  for (int k = 0; k < 3; ++k) {
+    zAxis[k] = (k == axis) ? normal : 0.;
+    yAxis[k] = (k == 1) ? 1. : 0.;
+  }
+  // x = y cross z with y = (0, 1, 0): (z_z, 0, -z_x).
+  xAxis[0] = zAxis[2];
+  xAxis[1] = 0.;
+  xAxis[2] = -zAxis[0];
+}
+
+void SyntheticRenderer::setPictures(const std::vector<SimPicture> &pictures)
+{
+  std::vector<Picture> made;
+  for (const SimPicture &in : pictures) {
+    if (in.width <= 0 || in.height <= 0 || in.pixels.size() != static_cast<size_t>(in.width) * in.height ||
+        !(in.widthMetres > 0.)) {
+      throw vpHSlamException(vpHSlamException::invalidArgument,
+                             "synthetic scene: a picture needs pixels and a positive width in metres");
+    }
+    Picture P;
+    double zAxis[3];
+    pictureAxes(in.centre, P.xAxis, P.yAxis, zAxis);
+    std::copy(in.centre, in.centre + 3, P.centre);
+    P.face = 0;
+    for (int a = 0; a < 3; ++a) {
+      if (zAxis[a] != 0.) {
+        P.face = 2 * a + (zAxis[a] > 0. ? 1 : 0);
+      }
+    }
+    P.halfWidth = 0.5 * in.widthMetres;
+    P.halfHeight = P.halfWidth * in.height / in.width;
+    for (int a = 0; a < 3; ++a) {
+      const double half = std::fabs(P.xAxis[a]) * P.halfWidth + std::fabs(P.yAxis[a]) * P.halfHeight;
+      if (P.centre[a] - half < kRoomLo[a] - kPictureOnWallMetres ||
+          P.centre[a] + half > kRoomHi[a] + kPictureOnWallMetres) {
+        throw vpHSlamException(vpHSlamException::invalidArgument,
+                               "synthetic scene: a picture does not fit on its wall");
+      }
+    }
+    // Magnified by whole texels (nearest), so printed edges stay sharp up close; the mip levels blur them only
+    // as far away as the camera's pixel footprint asks.
+    const int magnify = std::max(1, static_cast<int>(std::ceil(in.widthMetres / kPictureTexelMetres / in.width)));
+    MipLevel L0;
+    L0.width = in.width * magnify;
+    L0.height = in.height * magnify;
+    L0.scale = 1.0;
+    L0.pixels.resize(static_cast<size_t>(L0.width) * L0.height);
+    for (int y = 0; y < L0.height; ++y) {
+      for (int x = 0; x < L0.width; ++x) {
+        L0.pixels[static_cast<size_t>(y) * L0.width + x] =
+            in.pixels[static_cast<size_t>(y / magnify) * in.width + x / magnify];
+      }
+    }
+    P.texelsPerMetre = L0.width / in.widthMetres;
+    P.texture = makeTexture(std::move(L0));
+    made.push_back(std::move(P));
+  }
+  m_pictures = std::move(made);
+}
+
+const SyntheticRenderer::Picture *SyntheticRenderer::pictureAt(int face, const double p[3]) const
+{
+  for (const Picture &P : m_pictures) {
+    if (P.face != face) {
+      continue;
+    }
+    double a = 0., b = 0.;
+    for (int k = 0; k < 3; ++k) {
+      a += (p[k] - P.centre[k]) * P.xAxis[k];
+      b += (p[k] - P.centre[k]) * P.yAxis[k];
+    }
+    if (std::fabs(a) < P.halfWidth && std::fabs(b) < P.halfHeight) {
+      return &P;
+    }
+  }
+  return nullptr;
 }
 
 void SyntheticRenderer::addFace(int normalAxis, const double lo[3], const double hi[3], int texture, float albedo)
@@ -260,6 +367,19 @@ float SyntheticRenderer::shade(const double o[3], const double d[3], double pixe
   // Footprint of one sample on the surface (metres): distance x angle, stretched by 1/cos along the slant;
   // the geometric mean of both directions picks an isotropic mip level.
   const double footprint = t * norm * pixelAngle / std::sqrt(cosine);
+  if (faceIndex < 6 && !m_pictures.empty()) {
+    if (const Picture *picture = pictureAt(faceIndex, p)) {
+      double a = 0., b = 0.;
+      for (int k = 0; k < 3; ++k) {
+        a += (p[k] - picture->centre[k]) * picture->xAxis[k];
+        b += (p[k] - picture->centre[k]) * picture->yAxis[k];
+      }
+      const double texels = footprint * picture->texelsPerMetre;
+      const MipLevel &P0 = picture->texture.levels.front();
+      return sample(picture->texture, a * picture->texelsPerMetre + 0.5 * P0.width - 0.5,
+                    b * picture->texelsPerMetre + 0.5 * P0.height - 0.5, texels > 1.0 ? std::log2(texels) : 0.0);
+    }
+  }
   const double texels = footprint * F.texelsPerMetre;
   const double level = texels > 1.0 ? std::log2(texels) : 0.0;
   const Texture &T = m_textures[static_cast<size_t>(F.texture)];

@@ -97,6 +97,7 @@ void vpHSlamSyntheticScene::configure(unsigned int width, unsigned int height, u
   if (!m_renderer || path != m_loadedPath) {
     std::unique_ptr<hslam::SyntheticRenderer> renderer(new hslam::SyntheticRenderer());
     renderer->load(path);
+    renderer->setPictures(m_pictures);
     m_renderer = std::move(renderer);
     m_loadedPath = path;
   }
@@ -199,6 +200,49 @@ void vpHSlamSyntheticScene::getVignette(vpImage<float> &V) const
   V.resize(m_height, m_width, 1.f);
   if (!m_vignette.empty()) {
     std::copy(m_vignette.begin(), m_vignette.end(), V.bitmap);
+  }
+}
+
+vpHomogeneousMatrix vpHSlamSyntheticScene::addWallPicture(const vpImage<unsigned char> &picture,
+                                                         const vpColVector &centre, double width)
+{
+  if (centre.size() != 3) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "vpHSlamSyntheticScene::addWallPicture: the centre must be a 3-vector (metres)");
+  }
+  hslam::SimPicture P;
+  P.width = static_cast<int>(picture.getWidth());
+  P.height = static_cast<int>(picture.getHeight());
+  P.pixels.assign(picture.bitmap, picture.bitmap + picture.getSize());
+  for (unsigned int k = 0; k < 3; ++k) {
+    P.centre[k] = centre[k];
+  }
+  P.widthMetres = width;
+  std::vector<hslam::SimPicture> pictures = m_pictures;
+  pictures.push_back(P);
+  if (m_renderer) {
+    m_renderer->setPictures(pictures); // validates; throws before anything changed
+  } else {
+    hslam::SyntheticRenderer().setPictures({P});
+  }
+  m_pictures = std::move(pictures);
+  double x[3], y[3], z[3];
+  hslam::SyntheticRenderer::pictureAxes(P.centre, x, y, z);
+  vpHomogeneousMatrix wMp;
+  for (unsigned int r = 0; r < 3; ++r) {
+    wMp[r][0] = x[r];
+    wMp[r][1] = y[r];
+    wMp[r][2] = z[r];
+    wMp[r][3] = P.centre[r];
+  }
+  return wMp;
+}
+
+void vpHSlamSyntheticScene::clearWallPictures()
+{
+  m_pictures.clear();
+  if (m_renderer) {
+    m_renderer->setPictures(m_pictures);
   }
 }
 

@@ -22,6 +22,7 @@ namespace hslam
 {
 class SyntheticRenderer;
 class SyntheticTrajectory;
+struct SimPicture;
 } // namespace hslam
 
 /*!
@@ -168,6 +169,24 @@ public:
   */
   void writeSequence(const std::string &dir) const;
 
+  /*!
+    Hang a picture flat on one of the room's four walls, for example an AprilTag (the tag image with its white
+    margin): its pixels replace the wall's texture inside a rectangle, the geometry stays the wall's, so depths and
+    worldPointAt() are unchanged. It is drawn from the next render on, in every later configuration, until
+    clearWallPictures().
+    \param picture : grey image, printed as is (nearest texel up close, mip-mapped far away).
+    \param centre : world point (metres) on a wall: x = -2.5 or 2.5, or z = -2 or 3.5 (the back and front walls).
+    \param width : printed width in metres; the height follows the image's aspect ratio.
+    \return wMp, the picture's frame: origin at its centre, x along its columns, y along its rows (down), z into the
+    wall; the picture reads as printed from inside the room. For an AprilTag, the tag frame of
+    vpDetectorAprilTag::getPose() (y up, z out of the tag) is this frame turned half a turn about x.
+    \exception vpHSlamException::invalidArgument when the image is empty, the width not positive, the centre not on a
+    wall, or the picture does not fit on it.
+  */
+  vpHomogeneousMatrix addWallPicture(const vpImage<unsigned char> &picture, const vpColVector &centre, double width);
+  //! Take every picture added by addWallPicture() down.
+  void clearWallPictures();
+
   //! Photographs used as textures (for reports).
   std::vector<std::string> getTextureFiles() const;
 
@@ -189,6 +208,7 @@ private:
   Effects m_effects;
   std::unique_ptr<hslam::SyntheticRenderer> m_renderer;
   std::unique_ptr<hslam::SyntheticTrajectory> m_trajectory;
+  std::vector<hslam::SimPicture> m_pictures; //!< hung on the walls; given to every renderer
   std::vector<float> m_vignette; //!< per pixel, quantised to 8 bits as written (empty when off)
   std::vector<double> m_inverseResponse;
 };

@@ -1,0 +1,111 @@
+#include "features/TagDetector.h"
+
+#include "math/ViSPConversions.h"
+
+#include <visp3/detection/vpDetectorAprilTag.h>
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hslam
+{
+namespace
+{
+vpDetectorAprilTag::vpAprilTagFamily familyOf(const std::string &name)
+{
+  if (name == "tag36h11") {
+    return vpDetectorAprilTag::TAG_36h11;
+  }
+  if (name == "tag25h9") {
+    return vpDetectorAprilTag::TAG_25h9;
+  }
+  if (name == "tag16h5") {
+    return vpDetectorAprilTag::TAG_16h5;
+  }
+  if (name == "tagCircle21h7") {
+    return vpDetectorAprilTag::TAG_CIRCLE21h7;
+  }
+  throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: unknown family '" + name + "'");
+}
+} // namespace
+
+TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m_tag(tag), m_K(K)
+{
+  if (!tag.isSet()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: no tag described");
+  }
+  m_detector.reset(new vpDetectorAprilTag(familyOf(tag.getFamily()), vpDetectorAprilTag::HOMOGRAPHY_VIRTUAL_VS));
+  m_detector->setAprilTagNbThreads(1);
+  // Full resolution for the quads: keyframes only, and corner accuracy is what sets the scale.
+  m_detector->setAprilTagQuadDecimate(1.f);
+}
+
+TagDetector::~TagDetector() = default;
+
+std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
+{
+  std::vector<TagSighting> out;
+  m_lastRaw = 0;
+  if (I.getSize() == 0 || !m_detector->detect(I)) {
+    return out;
+  }
+  const std::vector<int> ids = m_detector->getTagsId();
+  const std::vector<std::vector<vpImagePoint>> corners = m_detector->getTagsCorners();
+  m_lastRaw = static_cast<unsigned int>(ids.size());
+  const double w = I.getWidth(), h = I.getHeight();
+  for (size_t i = 0; i < ids.size() && i < corners.size(); ++i) {
+    if ((m_tag.hasId() && ids[i] != m_tag.getId()) || corners[i].size() != 4) {
+      continue;
+    }
+    TagSighting s;
+    s.id = ids[i];
+    bool inside = true;
+    double minSide = std::numeric_limits<double>::infinity();
+    for (size_t k = 0; k < 4; ++k) {
+      const vpImagePoint &p = corners[i][k], &q = corners[i][(k + 1) % 4];
+      s.corners[k] = Eigen::Vector2d(p.get_u(), p.get_v());
+      inside = inside && p.get_u() >= kBorderPx && p.get_v() >= kBorderPx && p.get_u() <= w - 1 - kBorderPx &&
+               p.get_v() <= h - 1 - kBorderPx;
+      minSide = std::min(minSide, std::hypot(p.get_u() - q.get_u(), p.get_v() - q.get_v()));
+    }
+    if (!inside || minSide < kMinSidePx) {
+      continue;
+    }
+    vpHomogeneousMatrix cMt;
+    double error = 0.;
+    if (!m_detector->getPose(i, m_tag.getSize(), m_K, cMt, nullptr, &error, nullptr)) {
+      continue;
+    }
+    // getPose reports the residual of its virtual visual servoing as a sum over the corners' normalised
+    // coordinates; recompute the RMS in pixels from the pose to have a unit a threshold can be written in.
+    const double half = 0.5 * m_tag.getSize();
+    const double tagCorners[4][2] = {{-half, half}, {half, half}, {half, -half}, {-half, -half}};
+    double sq = 0.;
+    bool front = true;
+    std::array<Eigen::Vector2d, 4> projected;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d X = toSE3(cMt) * Eigen::Vector3d(tagCorners[k][0], tagCorners[k][1], 0.);
+      front = front && X.z() > 0.;
+      projected[k] = Eigen::Vector2d(m_K.get_u0() + m_K.get_px() * X.x() / X.z(),
+                                     m_K.get_v0() + m_K.get_py() * X.y() / X.z());
+    }
+    // The detector's corner order is fixed relative to the tag; match each projected corner to the nearest
+    // detected one so the check does not depend on it.
+    for (int k = 0; k < 4; ++k) {
+      double best = std::numeric_limits<double>::infinity();
+      for (int j = 0; j < 4; ++j) {
+        best = std::min(best, (projected[k] - s.corners[j]).squaredNorm());
+      }
+      sq += best;
+    }
+    s.projectionErrorPx = std::sqrt(sq / 4.);
+    if (!front || !(s.projectionErrorPx <= kMaxProjectionErrorPx)) {
+      continue;
+    }
+    s.cMt = toSE3(cMt);
+    out.push_back(s);
+  }
+  return out;
+}
+} // namespace hslam
