@@ -343,6 +343,20 @@ void printSummary(const Arguments &args, const vpHSlamParameters &params, const 
   std::cout << "wall time: " << std::setprecision(2) << wallS << " s for " << videoS << " s of video ("
             << (wallS > 0. ? videoS / wallS : 0.) << "x real time), CPU " << outcome.cpuS << " s; peak memory "
             << std::setprecision(1) << peakRssMb() << " MB" << std::endl;
+  if (args.tag.isSet()) {
+    std::cout << "tag " << args.tag.toString() << ": " << s.tagSightings << " sightings in keyframes, "
+              << s.tagSightingsUsed << " kept; ";
+    if (s.metric) {
+      std::cout << "outputs in metres" << (args.tag.hasId() ? " and in the tag's frame" : "") << " (scale "
+                << std::setprecision(4) << s.metricScale << " m per map unit, +- " << std::setprecision(2)
+                << 100. * s.metricScaleUncertainty << " %)" << std::endl;
+    } else {
+      std::cout << "NOT metric: "
+                << (s.tagSightings == 0 ? "the tag was never seen in a keyframe"
+                                        : "its sightings do not fix the scale well enough yet")
+                << "; outputs are in the map's own unit and frame" << std::endl;
+    }
+  }
   if (s.segments > 1) {
     std::cout << "warning: tracking was lost; the trajectory has " << s.segments
               << " map segments with independent scales (see the .segN.txt files)" << std::endl;
@@ -381,6 +395,7 @@ int run(const Arguments &args)
   std::cout << "source: " << source->describe() << std::endl;
   std::cout << source->getPhotometricCalibration().getStatus() << std::endl;
   vpHSlam slam(*source, params);
+  slam.setTag(args.tag);
   if (!args.loadMap.empty()) {
     slam.loadMap(args.loadMap);
     std::cout << "map: " << args.loadMap << " loaded"

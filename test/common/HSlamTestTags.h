@@ -4,9 +4,9 @@
 #define HSLAM_TEST_TAGS_H
 
 #include <visp3/core/vpColVector.h>
-#include <visp3/core/vpMath.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
 #include <visp3/core/vpImage.h>
+#include <visp3/core/vpMath.h>
 #include <visp3/hslam/vpHSlamSyntheticScene.h>
 
 #ifdef HSLAM_HAVE_APRILTAG_IMAGES

@@ -203,15 +203,21 @@ void printUsage(const char *program, std::ostream &out)
          "[--keyframes OUT.txt]\n"
          "       [--stats OUT.json] [--map-ply OUT.ply] [--map-png OUT.png] [--save-map OUT.hmap] [--load-map "
          "MAP.hmap]\n"
-         "       [--localization-only] [--skip-unreadable] [--log-level LEVEL] [--quiet] [--no-display]\n"
-         "       [--screenshot FILE.png] [--help]\n\n"
+         "       [--localization-only] [--tag FAMILY:SIZE[:ID]] [--skip-unreadable] [--log-level LEVEL] [--quiet]\n"
+         "       [--no-display] [--screenshot FILE.png] [--help]\n\n"
          "Runs H-SLAM on PATH (a dataset folder, an image folder, a printf pattern such as img/%06d.png, a video\n"
          "file or /dev/videoN). Output files are written at the end, also after a loss of tracking, an error of\n"
          "the source or a termination signal: SIGINT (Ctrl-C), SIGTERM or SIGHUP end the run after the current\n"
          "frame, write the files and exit with status 128 + the signal number (130, 143, 129); a second signal\n"
          "ends the program at once.\n\n";
   printSourceUsage(out);
-  out << "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
+  out << "  --tag F:S[:ID]     metric poses from an AprilTag: family (tag36h11, tag25h9, tag16h5, tagCircle21h7),\n"
+         "                     size of its black square in metres, optionally the id whose frame becomes the\n"
+         "                     world (x right, y up as printed, z out of the tag). Outputs are in metres once\n"
+         "                     the tag was seen from enough places (the summary and --stats say whether:\n"
+         "                     metric, tag_sightings, metric_scale); until then, and if it never is, in the\n"
+         "                     map's own unit. e.g. --tag tag36h11:0.16:0\n"
+         "  --mode NAME        slam (global map re-used in the window, loop detection, Sim(3) verification,\n"
          "                     pose-graph correction of the marginalised keyframes, relocalisation), vo-reuse\n"
          "                     (global map re-used, relocalisation; no loop closure) or vo-strict (window\n"
          "                     only, DSO-like; relocalisation only with hybrid or indirect tracking);\n"
@@ -314,6 +320,8 @@ Arguments parseArguments(int argc, const char *const argv[])
       args.mapPng = value();
     } else if (option == "--save-map") {
       args.saveMap = value();
+    } else if (option == "--tag") {
+      args.tag = vpHSlamTag::parse(value());
     } else if (option == "--load-map") {
       args.loadMap = value();
     } else if (option == "--localization-only") {

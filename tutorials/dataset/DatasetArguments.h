@@ -5,6 +5,7 @@
 
 #include <visp3/hslam/vpHSlamImageSource.h>
 #include <visp3/hslam/vpHSlamParameters.h>
+#include <visp3/hslam/vpHSlamTag.h>
 
 #include <ostream>
 #include <string>
@@ -56,6 +57,7 @@ struct Arguments {
   std::string saveMap;           //!< --save-map: the map file at the end (vpHSlam::saveMap)
   std::string loadMap;           //!< --load-map: a map file loaded before the first frame (vpHSlam::loadMap)
   bool localizationOnly = false; //!< --localization-only: locate frames in the loaded map, never change it
+  vpHSlamTag tag;                //!< --tag FAMILY:SIZE[:ID]: metric output from an AprilTag (not set: none)
   std::string saveConfig;
   std::string logLevel = "warning";
   bool display = true;

@@ -36,6 +36,31 @@ std::string jsonString(const std::string &text)
   }
   return quoted + "\"";
 }
+//! The loop-closure and metric-frame (--tag) fields of writeStats(), each line ending with a comma.
+void writeLoopAndTagFields(std::ostream &out, const vpHSlam::Statistics &s, const Arguments &args)
+{
+  out << "  \"loop_candidates_verified\": " << s.loopCandidatesVerified << ",\n"
+      << "  \"loops_detected\": " << s.loopsDetected << ",\n"
+      << "  \"loops_corrected\": " << s.loopsCorrected << ",\n"
+      << "  \"last_loop_correction_ms\": " << jsonNumber(s.lastLoopCorrectionMs) << ",\n"
+      << "  \"loop_correction_ms_max\": " << jsonNumber(s.loopCorrectionMsMax) << ",\n"
+      << "  \"loop_detection_ms_mean\": " << jsonNumber(s.loopDetectionMsMean) << ",\n"
+      << "  \"loop_verification_ms_max\": " << jsonNumber(s.loopVerificationMsMax) << ",\n"
+      << "  \"global_ba_started\": " << s.globalBundleAdjustments << ",\n"
+      << "  \"global_ba_applied\": " << s.globalBundleAdjustmentsApplied << ",\n"
+      << "  \"global_ba_s_max\": " << jsonNumber(s.globalBundleAdjustmentSecondsMax) << ",\n"
+      << "  \"global_ba_rms_before_px\": " << jsonNumber(s.globalBundleAdjustmentRmsBeforePx) << ",\n"
+      << "  \"global_ba_rms_after_px\": " << jsonNumber(s.globalBundleAdjustmentRmsAfterPx) << ",\n"
+      << "  \"frames_during_loop_correction\": " << s.framesDuringLoopCorrection << ",\n"
+      << "  \"tracking_ms_max_during_loop_correction\": " << jsonNumber(s.trackingMsMaxDuringLoopCorrection) << ",\n"
+      << "  \"tag\": " << (args.tag.isSet() ? jsonString(args.tag.toString()) : std::string("null")) << ",\n"
+      << "  \"metric\": " << (s.metric ? "true" : "false") << ",\n"
+      << "  \"tag_sightings\": " << s.tagSightings << ",\n"
+      << "  \"tag_sightings_used\": " << s.tagSightingsUsed << ",\n"
+      << "  \"metric_scale\": " << jsonNumber(s.metricScale) << ",\n"
+      << "  \"metric_scale_uncertainty\": " << jsonNumber(s.metricScaleUncertainty) << ",\n"
+      << "  \"tag_detection_ms_mean\": " << jsonNumber(s.tagDetectionMsMean) << ",\n";
+}
 } // namespace
 
 std::string signalName(int signal)
@@ -137,22 +162,9 @@ void writeStats(const std::string &path, const vpHSlam::Statistics &s, const Arg
       << "  \"reactivated_points_per_keyframe\": " << jsonNumber(s.reactivatedPointsPerKeyframe) << ",\n"
       << "  \"fused_points_per_keyframe\": " << jsonNumber(s.fusedPointsPerKeyframe) << ",\n"
       << "  \"window_share_from_global\": " << jsonNumber(s.windowShareFromGlobal) << ",\n"
-      << "  \"loop_candidates_verified\": " << s.loopCandidatesVerified << ",\n"
-      << "  \"loops_detected\": " << s.loopsDetected << ",\n"
-      << "  \"loops_corrected\": " << s.loopsCorrected << ",\n"
-      << "  \"last_loop_correction_ms\": " << jsonNumber(s.lastLoopCorrectionMs) << ",\n"
-      << "  \"loop_correction_ms_max\": " << jsonNumber(s.loopCorrectionMsMax) << ",\n"
-      << "  \"loop_detection_ms_mean\": " << jsonNumber(s.loopDetectionMsMean) << ",\n"
-      << "  \"loop_verification_ms_max\": " << jsonNumber(s.loopVerificationMsMax) << ",\n"
-      << "  \"global_ba_started\": " << s.globalBundleAdjustments << ",\n"
-      << "  \"global_ba_applied\": " << s.globalBundleAdjustmentsApplied << ",\n"
-      << "  \"global_ba_s_max\": " << jsonNumber(s.globalBundleAdjustmentSecondsMax) << ",\n"
-      << "  \"global_ba_rms_before_px\": " << jsonNumber(s.globalBundleAdjustmentRmsBeforePx) << ",\n"
-      << "  \"global_ba_rms_after_px\": " << jsonNumber(s.globalBundleAdjustmentRmsAfterPx) << ",\n"
-      << "  \"frames_during_loop_correction\": " << s.framesDuringLoopCorrection << ",\n"
-      << "  \"tracking_ms_max_during_loop_correction\": " << jsonNumber(s.trackingMsMaxDuringLoopCorrection) << ",\n"
-      << "  \"descriptor_kb_per_keyframe\": " << jsonNumber(s.descriptorKbPerKeyframe) << ",\n"
-      << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
+      << "  \"descriptor_kb_per_keyframe\": " << jsonNumber(s.descriptorKbPerKeyframe) << ",\n";
+  writeLoopAndTagFields(out, s, args);
+  out << "  \"wall_s\": " << jsonNumber(wallS) << ",\n"
       << "  \"cpu_s\": " << jsonNumber(cpuS) << ",\n"
       << "  \"video_s\": " << jsonNumber(videoS) << ",\n"
       << "  \"realtime_factor\": " << jsonNumber(wallS > 0. ? videoS / wallS : 0.) << ",\n"

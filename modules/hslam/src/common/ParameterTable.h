@@ -193,6 +193,11 @@ inline const Field kFields[] = {
   HSLAM_PARAM(loop, globalBaHuberPx, positive(), "Huber threshold of the global bundle adjustment, pixels"),
   HSLAM_PARAM(loop, globalBaPointsPerKeyframe, atLeast(0), "points per stored keyframe it adjusts (0 = all)"),
 
+  HSLAM_PARAM(tagFrame, minSightings, atLeast(2), "tag sightings the fit keeps before the output is metric"),
+  HSLAM_PARAM(tagFrame, maxScaleUncertainty, positive(), "relative scale uncertainty under which it is metric"),
+  HSLAM_PARAM(tagFrame, outlierRotationDeg, between(0., 180.), "sightings off the rotation consensus are refused, deg"),
+  HSLAM_PARAM(tagFrame, outlierDistanceShare, positive(), "sightings missing the fit by this share of range refused"),
+
   HSLAM_PARAM(system, mode, anyValue(), "vo-strict, vo-reuse or slam"),
   HSLAM_PARAM(system, deterministic, anyValue(), "map in the caller's thread: identical output run to run"),
   HSLAM_PARAM(system, workerThreads, atLeast(0), "threads for residual accumulation (0 = caller only)"),

@@ -87,8 +87,8 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
     for (int k = 0; k < 4; ++k) {
       const Eigen::Vector3d X = toSE3(cMt) * Eigen::Vector3d(tagCorners[k][0], tagCorners[k][1], 0.);
       front = front && X.z() > 0.;
-      projected[k] = Eigen::Vector2d(m_K.get_u0() + m_K.get_px() * X.x() / X.z(),
-                                     m_K.get_v0() + m_K.get_py() * X.y() / X.z());
+      projected[k] =
+          Eigen::Vector2d(m_K.get_u0() + m_K.get_px() * X.x() / X.z(), m_K.get_v0() + m_K.get_py() * X.y() / X.z());
     }
     // The detector's corner order is fixed relative to the tag; match each projected corner to the nearest
     // detected one so the check does not depend on it.

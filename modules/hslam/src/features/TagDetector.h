@@ -39,9 +39,11 @@ namespace hslam
 //! One tag seen in one image.
 struct TagSighting {
   int id = -1;
-  SE3d cMt;                                //!< tag frame to camera (metres): vpDetectorAprilTag::getPose()'s cMo
-  std::array<Eigen::Vector2d, 4> corners;  //!< image corners, pixels (the detector's order)
-  double projectionErrorPx = 0.;           //!< RMS corner reprojection error of cMt
+  SE3d cMt; //!< tag frame to camera (metres): vpDetectorAprilTag::getPose()'s cMo
+  //! image corners, pixels (the detector's order)
+  std::array<Eigen::Vector2d, 4> corners = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero(),
+                                            Eigen::Vector2d::Zero()};
+  double projectionErrorPx = 0.; //!< RMS corner reprojection error of cMt
 };
 
 class VISP_EXPORT TagDetector

@@ -93,9 +93,9 @@ private:
     double lo[3], hi[3];
   };
   struct Picture {
-    int face;                 //!< room face it hangs on
-    double centre[3];         //!< world, metres
-    double xAxis[3], yAxis[3]; //!< its columns and rows in the world
+    int face;                     //!< room face it hangs on
+    double centre[3];             //!< world, metres
+    double xAxis[3], yAxis[3];    //!< its columns and rows in the world
     double halfWidth, halfHeight; //!< metres
     double texelsPerMetre;
     Texture texture; //!< the picture magnified (nearest texel) so that one texel is at most kPictureTexelMetres

@@ -204,7 +204,7 @@ void vpHSlamSyntheticScene::getVignette(vpImage<float> &V) const
 }
 
 vpHomogeneousMatrix vpHSlamSyntheticScene::addWallPicture(const vpImage<unsigned char> &picture,
-                                                         const vpColVector &centre, double width)
+                                                          const vpColVector &centre, double width)
 {
   if (centre.size() != 3) {
     throw vpHSlamException(vpHSlamException::invalidArgument,

@@ -189,6 +189,8 @@ vpHSlam::State SlamSystem::initialize(const FramePtr &frame, const vpImage<unsig
     return vpHSlam::stateInitializing;
   }
   publishAfterKeyframe();
+  observeTags(m_keyframeCount.load() - 2, *m_initializer->firstFrame());
+  observeTags(m_keyframeCount.load() - 1, *frame);
   adoptPreparedReference();
   backfill(m_initializer->result(), frame->id);
   m_initializer->reset();
@@ -362,6 +364,7 @@ void SlamSystem::reset()
   dropPreparedReferenceAndSnapshot();
   m_recorder.clear();
   m_runStats.clear();
+  m_metricFrame.clear();
   m_initializer->reset();
   m_frameTracker->reset();
   if (m_localizer) {

@@ -38,6 +38,7 @@
 
 #include "map/Frame.h"
 #include "map/MapFile.h"
+#include "map/MetricFrame.h"
 #include "math/SE3.h"
 #include "system/FramePreprocessor.h"
 #include "system/LocalMapper.h"
@@ -85,8 +86,11 @@ public:
   std::vector<vpImagePoint> descriptorMatches() const { return m_frameTracker->descriptorMatches(); }
   std::vector<vpHSlam::MapPoint> mapPoints() const;
   std::vector<vpHSlam::GraphEdge> graphEdges() const;
-  vpHSlamTrajectory trajectory(int segment) const { return m_recorder.trajectory(segment); }
-  vpHSlamTrajectory keyframeTrajectory(int segment) const { return m_recorder.keyframeTrajectory(segment); }
+  vpHSlamTrajectory trajectory(int segment) const { return m_metricFrame.toOutput(m_recorder.trajectory(segment)); }
+  vpHSlamTrajectory keyframeTrajectory(int segment) const
+  {
+    return m_metricFrame.toOutput(m_recorder.keyframeTrajectory(segment));
+  }
   std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
   vpHSlam::Statistics statistics() const;
   void synchronize();
@@ -95,6 +99,9 @@ public:
   void reset();
   void saveMap(const std::string &path);
   void loadMap(const std::string &path);
+  void setTag(const vpHSlamTag &tag);
+  vpHSlamTag tag() const;
+  vpHSlam::WorldFrame worldFrame() const;
 
   const FramePreprocessor &preprocessor() const { return m_preprocessor; }
   void rectifiedImage(vpImage<unsigned char> &I) const;
@@ -127,6 +134,8 @@ private:
   void declareLost(bool discardSegment = false);
   //! Forgets the prepared tracking reference and empties the published map snapshot (after the map was cleared).
   void dropPreparedReferenceAndSnapshot();
+  //! Back end, after keyframe \e keyframeId was recorded: the metric frame looks for the tag in it.
+  void observeTags(int keyframeId, const Frame &frame);
   //! The rectified camera, as map files record it.
   MapCamera mapCamera() const;
   //! Throws when the mode keeps no global map (vo-strict): \e operation names the call in the message.
@@ -206,6 +215,9 @@ private:
   int m_pendingKeyframeRef = -1;        //!< newest reference keyframe of a frame that asked for a keyframe, -1: none
   int m_pendingSeedKeyframe = -1;       //!< a queued frame seeds the window from this stored keyframe (see MappingJob)
   bool m_pendingRelocalization = false; //!< a queued frame was relocalised (see MappingJob)
+
+  // ---- metric frame (setTag()): fed by the back end, read by the output getters
+  MetricFrame m_metricFrame;
 
   // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
   double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread

@@ -143,6 +143,7 @@ double SlamSystem::runJob(const MappingJob &job)
   m_recorder.addFrame(job.frame->id, job.frame->timestamp, id, SE3d(), m_segment);
   m_mapper->makeKeyframe(job.frame, id, job.seedKeyframe);
   publishAfterKeyframe();
+  observeTags(id, *job.frame);
   m_runStats.addKeyframeMappingMs(nowMs() - t0);
   const double cpu = threadCpuMs() - c0;
   m_cpuMapKeyframes += cpu;
@@ -251,11 +252,19 @@ int SlamSystem::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyfram
   return m_mapper->closestKeyframe(cMw, keyframeIds);
 }
 
+void SlamSystem::observeTags(int keyframeId, const Frame &frame)
+{
+  // Called with m_mapperMutex held (runJob, initialisation): the window's points may be read.
+  m_metricFrame.observeKeyframe(
+      keyframeId, m_segment, frame.raw, [this](int id, SE3d &wMc) { return m_recorder.keptKeyframePose(id, wMc); },
+      [this](std::vector<Eigen::Vector3d> &points) { m_mapper->activePointsWorld(points); });
+}
+
 vpHomogeneousMatrix SlamSystem::get_cMw() const
 {
   SE3d wMc;
   if (m_recorder.lastFramePose(wMc)) {
-    return toVpHomogeneousMatrix(wMc.inverse());
+    return toVpHomogeneousMatrix(outputPose(m_metricFrame.current(), wMc).inverse());
   }
   return vpHomogeneousMatrix();
 }
@@ -268,6 +277,7 @@ bool SlamSystem::hasPose() const
 std::vector<vpHSlam::Keyframe> SlamSystem::keyframes() const
 {
   const std::vector<TrajectoryRecorder::KeyframeRecord> records = m_recorder.keyframes();
+  const MetricFit fit = m_metricFrame.current();
   std::vector<vpHSlam::Keyframe> out;
   out.reserve(records.size());
   for (size_t i = 0; i < records.size(); ++i) {
@@ -278,7 +288,7 @@ std::vector<vpHSlam::Keyframe> SlamSystem::keyframes() const
     k.id = static_cast<unsigned int>(records[i].id);
     k.frameIndex = static_cast<unsigned int>(records[i].frameIndex);
     k.timestamp = records[i].timestamp;
-    k.wMc = toVpHomogeneousMatrix(records[i].wMc);
+    k.wMc = toVpHomogeneousMatrix(outputPose(fit, records[i].wMc));
     k.inWindow = records[i].inWindow;
     k.segment = records[i].segment;
     k.activePoints = records[i].activePoints;
@@ -297,6 +307,8 @@ std::vector<vpColVector> SlamSystem::activePoints(std::vector<double> *depths) c
   SE3d wMc;
   const bool havePose = m_recorder.lastFramePose(wMc);
   const SE3d cMw = wMc.inverse();
+  const MetricFit fit = m_metricFrame.current();
+  const double depthScale = fit.metric ? fit.scale : 1.;
   std::vector<vpColVector> out;
   out.reserve(points.size());
   if (depths) {
@@ -304,13 +316,14 @@ std::vector<vpColVector> SlamSystem::activePoints(std::vector<double> *depths) c
     depths->reserve(points.size());
   }
   for (const Eigen::Vector3d &p : points) {
+    const Eigen::Vector3d o = outputPoint(fit, p);
     vpColVector v(3);
-    v[0] = p.x();
-    v[1] = p.y();
-    v[2] = p.z();
+    v[0] = o.x();
+    v[1] = o.y();
+    v[2] = o.z();
     out.push_back(v);
     if (depths) {
-      depths->push_back(havePose ? (cMw * p).z() : p.z());
+      depths->push_back(depthScale * (havePose ? (cMw * p).z() : p.z()));
     }
   }
   return out;
@@ -379,7 +392,42 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.relocalizationsAttempted = m_relocAttempts.load();
   s.relocalizationsSucceeded = m_relocSuccesses.load();
   s.descriptorKbPerKeyframe = m_snapshotDescriptorKb;
+  const MetricFit fit = m_metricFrame.current();
+  s.metric = fit.metric;
+  s.tagSightings = m_metricFrame.sightingCount();
+  s.tagSightingsUsed = fit.kept;
+  s.metricScale = fit.scale;
+  s.metricScaleUncertainty = fit.scaleUncertainty;
+  s.tagDetectionMsMean = m_metricFrame.detectionMsMean();
   return s;
+}
+
+void SlamSystem::setTag(const vpHSlamTag &tag)
+{
+  m_metricFrame.setTag(tag, m_params.tagFrame, m_preprocessor.getCameraParameters());
+}
+
+vpHSlamTag SlamSystem::tag() const
+{
+  return m_metricFrame.tag();
+}
+
+vpHSlam::WorldFrame SlamSystem::worldFrame() const
+{
+  const MetricFit fit = m_metricFrame.current();
+  vpHSlam::WorldFrame w;
+  w.metric = fit.metric;
+  w.tagFrame = fit.metric && fit.tagFrame;
+  w.scale = fit.scale;
+  w.scaleUncertainty = fit.scaleUncertainty;
+  w.rmsMetres = fit.rmsMetres;
+  w.sightings = m_metricFrame.sightingCount();
+  w.sightingsUsed = fit.kept;
+  if (fit.metric) {
+    double scale = 1.;
+    w.oMw = toVpHomogeneousMatrix(fit.mSw, scale);
+  }
+  return w;
 }
 
 std::vector<vpHSlam::MapPoint> SlamSystem::mapPoints() const
@@ -392,11 +440,13 @@ std::vector<vpHSlam::MapPoint> SlamSystem::mapPoints() const
       m_mapper->mapPointsWorld(points, status);
     }
   }
+  const MetricFit fit = m_metricFrame.current();
   std::vector<vpHSlam::MapPoint> out(points.size());
   for (size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3d o = outputPoint(fit, points[i]);
     out[i].wX.resize(3);
     for (unsigned int k = 0; k < 3; ++k) {
-      out[i].wX[k] = points[i][static_cast<int>(k)];
+      out[i].wX[k] = o[static_cast<int>(k)];
     }
     out[i].active = status[i] == 0;
   }

@@ -135,6 +135,17 @@ SE3d TrajectoryRecorder::keyframePose(int keyframeId) const
   return k->wMc;
 }
 
+bool TrajectoryRecorder::keptKeyframePose(int keyframeId, SE3d &wMc) const
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  const KeyframeRecord *k = findLocked(keyframeId);
+  if (!k || k->discarded) {
+    return false;
+  }
+  wMc = k->wMc;
+  return true;
+}
+
 bool TrajectoryRecorder::lastFramePose(SE3d &wMc) const
 {
   std::lock_guard<std::mutex> lock(m_mutex);

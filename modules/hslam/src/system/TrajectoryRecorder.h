@@ -78,6 +78,8 @@ public:
 
   //! Current world pose of keyframe \e id. \exception vpHSlamException::invalidArgument for an unknown id.
   SE3d keyframePose(int keyframeId) const;
+  //! Pose of a keyframe that is recorded and not discarded; false otherwise (no exception).
+  bool keptKeyframePose(int keyframeId, SE3d &wMc) const;
   //! Current world pose wMc of the recorded frame with the highest index; false when none.
   bool lastFramePose(SE3d &wMc) const;
   //! Current world pose wMc of a recorded frame index; false when not recorded.

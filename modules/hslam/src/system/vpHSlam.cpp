@@ -132,6 +132,26 @@ const vpHSlamParameters &vpHSlam::getParameters() const
   return m_system->parameters();
 }
 
+void vpHSlam::setTag(const vpHSlamTag &tag)
+{
+  m_system->setTag(tag);
+}
+
+vpHSlamTag vpHSlam::getTag() const
+{
+  return m_system->tag();
+}
+
+bool vpHSlam::isMetric() const
+{
+  return m_system->worldFrame().metric;
+}
+
+vpHSlam::WorldFrame vpHSlam::getWorldFrame() const
+{
+  return m_system->worldFrame();
+}
+
 std::string vpHSlam::stateName(State state)
 {
   switch (state) {

@@ -18,6 +18,7 @@
 #include <visp3/hslam/vpHSlamImageSource.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 #include <visp3/hslam/vpHSlamPhotometricCalibration.h>
+#include <visp3/hslam/vpHSlamTag.h>
 #include <visp3/hslam/vpHSlamTrajectory.h>
 
 #include <memory>
@@ -68,6 +69,11 @@ class SlamSystem;
   "tracking" thread). The getters (get_cMw(), getKeyframes(), getActivePoints(), getTrajectory(), getStatistics())
   are thread-safe snapshots and may be called from any thread, e.g. a viewer. The object owns its mapping thread;
   the destructor stops it once the frames still queued for mapping (a few at most) are processed.
+
+  Metric poses from an AprilTag: after setTag(), keyframes are searched for the tag and, once its sightings fix the
+  scale well enough (getWorldFrame()), every output (get_cMw(), getKeyframes(), getActivePoints(), getMapPoints(),
+  getTrajectory(), getKeyframeTrajectory()) is in metres and, when the tag's id was given, in the tag's frame. Until
+  then outputs are in the map's own frame and unit, and getWorldFrame().metric says so (docs/metric-tag-frame.md).
 
   Settings: the vpHSlamParameters defaults run the whole SLAM system (mode slam: global map, loop closure,
   relocalisation) with fewer points and keyframes than DSO and a 6-keyframe window, about 3x to 6x real time on one
@@ -163,6 +169,28 @@ public:
     double globalBundleAdjustmentRmsAfterPx = 0.;    //!< ... and after, pixels
     unsigned int framesDuringLoopCorrection = 0;     //!< real time: frames tracked while a correction ran
     double trackingMsMaxDuringLoopCorrection = 0.;   //!< real time: the longest of their tracking times, ms
+    bool metric = false;                //!< outputs are in metres (a tag was described and its fit is trusted)
+    unsigned int tagSightings = 0;      //!< tag sightings in keyframes (setTag())
+    unsigned int tagSightingsUsed = 0;  //!< of which kept by the metric fit (its segment, not refused)
+    double metricScale = 1.;            //!< metres per map unit of the fit (1 when none)
+    double metricScaleUncertainty = 1.; //!< the fit's relative standard deviation of that scale (1 when none)
+    double tagDetectionMsMean = 0.;     //!< tag detection per keyframe, milliseconds
+  };
+
+  //! The frame the outputs are expressed in (setTag()).
+  struct WorldFrame {
+    bool metric = false;            //!< outputs in metres (the tag's fit is trusted); false: the map's own unit
+    bool tagFrame = false;          //!< ... and in the frame of the tag whose id was given (else the map's axes)
+    double scale = 1.;              //!< metres per map unit of the current fit (1 when there is none)
+    double scaleUncertainty = 1.;   //!< its relative standard deviation
+    double rmsMetres = 0.;          //!< RMS camera-position residual of the fitted sightings, metres
+    unsigned int sightings = 0;     //!< tag sightings in keyframes so far
+    unsigned int sightingsUsed = 0; //!< kept by the fit
+    /*!
+      The similarity from the map's frame to the output frame as [R t; 0 1] and its scale: a map point X goes to
+      scale * R X + t (identity and 1 while not metric).
+    */
+    vpHomogeneousMatrix oMw;
   };
 
   /*!
@@ -195,6 +223,19 @@ public:
     this way leaves the system as it was: the next valid frame is tracked as if the refused one had not come.
   */
   State track(const vpImage<unsigned char> &I, double timestamp, double exposure = -1.);
+
+  /*!
+    Describe the AprilTag that gives the outputs metres (and, with its id, its frame): from the next keyframe on,
+    keyframes are searched for it. A tag not set (vpHSlamTag()) turns this off. Sightings so far are forgotten.
+    \exception vpHSlamException::unsupported when this ViSP has no AprilTag detector.
+  */
+  void setTag(const vpHSlamTag &tag);
+  //! The tag described by setTag() (not set by default).
+  vpHSlamTag getTag() const;
+  //! True when the outputs are in metres (see WorldFrame).
+  bool isMetric() const;
+  //! The frame the outputs are in, and the fit behind it.
+  WorldFrame getWorldFrame() const;
 
   //! State returned by the last track() (stateInitializing before the first).
   State getState() const;

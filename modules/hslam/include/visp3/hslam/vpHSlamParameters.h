@@ -233,6 +233,23 @@ public:
     int globalBaPointsPerKeyframe = 100; //!< points of each stored keyframe it adjusts (most observed; 0 = all)
   };
 
+  /*!
+    The metric frame from an AprilTag (vpHSlam::setTag(); docs/metric-tag-frame.md): how the tag's sightings in
+    keyframes are fitted to the keyframes' poses (a similarity), and when the fit is trusted.
+  */
+  struct TagFrame {
+    int minSightings = 3; //!< sightings (keyframes that saw the tag) kept by the fit before the output is metric
+    //! Relative standard deviation of the fitted scale (from the fit's residuals and the sightings' spread) under
+    //! which the output is metric. 1 %: the acceptance of the issue that asked for the tag frame.
+    double maxScaleUncertainty = 0.01;
+    //! A sighting whose rotation disagrees with the others' consensus by more than this is refused, degrees (the
+    //! detector's orientation is good to 1-2 degrees; a flipped, ambiguous pose is off by tens).
+    double outlierRotationDeg = 5.;
+    //! A sighting whose camera position misses the fit by more than this share of its distance to the tag (or 3
+    //! robust standard deviations, whichever is larger) is refused.
+    double outlierDistanceShare = 0.03;
+  };
+
   //! System-wide behaviour.
   struct System {
     Mode mode = modeSlam;                  //!< see Mode (docs/accuracy-and-speed.md, "Defaults": why slam)
@@ -250,6 +267,7 @@ public:
   Tracking tracking;       //!< hybrid tracking and relocalisation
   GlobalMap globalMap;     //!< global map re-use and connectivity graph
   Loop loop;               //!< loop detection and verification
+  TagFrame tagFrame;       //!< metric frame from an AprilTag (vpHSlam::setTag())
   System system;           //!< system-wide behaviour
 
   /*!

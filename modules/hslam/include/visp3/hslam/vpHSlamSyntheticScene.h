@@ -209,7 +209,7 @@ private:
   std::unique_ptr<hslam::SyntheticRenderer> m_renderer;
   std::unique_ptr<hslam::SyntheticTrajectory> m_trajectory;
   std::vector<hslam::SimPicture> m_pictures; //!< hung on the walls; given to every renderer
-  std::vector<float> m_vignette; //!< per pixel, quantised to 8 bits as written (empty when off)
+  std::vector<float> m_vignette;             //!< per pixel, quantised to 8 bits as written (empty when off)
   std::vector<double> m_inverseResponse;
 };
 

@@ -56,11 +56,11 @@ public:
   //! Families this build detects.
   static std::vector<std::string> familyNames();
 
-  bool isSet() const { return !m_family.empty(); }       //!< a tag was described
+  bool isSet() const { return !m_family.empty(); }          //!< a tag was described
   const std::string &getFamily() const { return m_family; } //!< e.g. "tag36h11" (empty when not set)
-  double getSize() const { return m_size; }                //!< side of the black square, metres
-  int getId() const { return m_id; }                       //!< id defining the world frame, -1: scale only
-  bool hasId() const { return m_id >= 0; }                 //!< an id defines the world frame
+  double getSize() const { return m_size; }                 //!< side of the black square, metres
+  int getId() const { return m_id; }                        //!< id defining the world frame, -1: scale only
+  bool hasId() const { return m_id >= 0; }                  //!< an id defines the world frame
   //! The FAMILY:SIZE[:ID] form (parse() reads it back); "none" when not set.
   std::string toString() const;
 

@@ -1,0 +1,168 @@
+/*
+ * H-SLAM for ViSP.
+ */
+/*!
+  \file MetricFrame.h
+  \brief The similarity that makes the map metric (and, with a tag id, expressed in the tag's frame), fitted to a
+  described AprilTag's sightings in keyframes.
+
+  What it is for: monocular SLAM poses are up to scale, in the frame of the first keyframe. A tag of known size seen
+  from a keyframe gives that keyframe's camera pose in the tag's frame in metres (features/TagDetector.h). With the
+  keyframes' SLAM poses wMc_i, every sighting i relates the two frames:
+    camera centre   q_i = tMc_i.t = s R p_i + t      (p_i = wMc_i.t)
+    orientation     tRc_i = R wRc_i
+  for the similarity mSw = (s, R, t) from the SLAM world to the metric one. The fit (fitMetricFrame()):
+  1. R: each sighting proposes R_i = tRc_i wRc_i^T; the proposal with most others within outlierRotationDeg seeds
+     the consensus, the agreeing ones are averaged (quaternion mean), the others refused (an ambiguous, flipped tag
+     pose is off by tens of degrees).
+  2. s, t with R held: linear least squares on the camera centres (closed form about their means), then sightings
+     that miss by more than max(3 robust sigma, outlierDistanceShare x their range to the tag) are refused and the
+     fit repeated (at most 3 times).
+  3. Trust: the scale's relative standard deviation sigma_r / sqrt(sum |q_i - q_mean|^2), sigma_r the residual per
+     coordinate (at least 0.3 % of the mean range, the detector's own precision on a 45-pixel tag, so a perfect fit on
+     three close views is not trusted), must be under maxScaleUncertainty with at least minSightings kept. A camera
+     that only rotates in front of the tag never becomes metric: the scale is not observable then.
+  Without a tag id, the output keeps SLAM's world frame and only takes the scale: mSw = (s, I, 0).
+
+  Only sightings of one map segment are fitted together (a new segment after a loss has its own scale): those of the
+  newest segment that has any; the frame is not metric in a segment where the tag was never seen. Each refit reads
+  the keyframes' current poses, so window optimisation and loop corrections flow into the frame.
+
+  Threading: observeKeyframe(), addSightings(), refit() and clear() from the back end, setTag() from the caller's
+  thread (the detector has its own mutex); current() and the output conversions from any thread (a mutex guards the
+  result). Given: keyframe images (or sightings) and keyframe poses. Hands back: the fit, and outputs converted by it.
+*/
+#ifndef HSLAM_MAP_METRIC_FRAME_H
+#define HSLAM_MAP_METRIC_FRAME_H
+
+#include "features/TagDetector.h"
+#include "math/SE3.h"
+#include "math/Sim3.h"
+
+#include <visp3/core/vpCameraParameters.h>
+#include <visp3/core/vpConfig.h>
+#include <visp3/hslam/vpHSlamParameters.h>
+#include <visp3/hslam/vpHSlamTag.h>
+#include <visp3/hslam/vpHSlamTrajectory.h>
+
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <vector>
+
+namespace hslam
+{
+//! One sighting as the fit takes it: the keyframe's SLAM pose and the tag's pose in its camera.
+struct TagView {
+  SE3d wMc;               //!< keyframe camera to SLAM world (map units)
+  SE3d cMt;               //!< tag to camera, metres
+  double depthScale = 0.; //!< metres per map unit from the map's points on the tag (0: none measured)
+  int depthPoints = 0;    //!< points that measured it
+};
+
+//! What the fit gave.
+struct MetricFit {
+  bool metric = false;           //!< trusted (see MetricFrame.h, step 3)
+  bool tagFrame = false;         //!< mSw puts the world in the tag's frame (an id was given)
+  Sim3d mSw;                     //!< SLAM world to the output world (metres)
+  double scale = 1.;             //!< metres per map unit (s)
+  double scaleUncertainty = 1.;  //!< relative standard deviation of s (1: unknown)
+  double rmsMetres = 0.;         //!< RMS camera-centre residual of the kept sightings, metres
+  double rotationSpreadDeg = 0.; //!< RMS angle of the kept sightings' rotations to the consensus, degrees
+  double depthScale = 0.;        //!< the scale the map's points on the tag gave (0: none)
+  unsigned int sightings = 0;    //!< sightings fitted (one segment, one tag)
+  unsigned int kept = 0;         //!< of which kept (the others refused as outliers)
+  std::vector<bool> inlier;      //!< per view given to fitMetricFrame()
+};
+
+/*!
+  The robust fit of MetricFrame.h on \e views (one tag, one segment). With \e tagFrame false only the scale is
+  applied (mSw = (s, I, 0)). Fewer than two views, or all refused: metric false, scale 1.
+*/
+VISP_EXPORT MetricFit fitMetricFrame(const std::vector<TagView> &views, bool tagFrame,
+                                     const vpHSlamParameters::TagFrame &options);
+
+/*!
+  The output frame of a fit: wMc (SLAM world, map units) as the camera pose in the output world, metres when the fit
+  is metric; identity when it is not (poses stay in the SLAM frame until the fit is trusted).
+*/
+VISP_EXPORT SE3d outputPose(const MetricFit &fit, const SE3d &wMc);
+//! The same for a point.
+VISP_EXPORT Eigen::Vector3d outputPoint(const MetricFit &fit, const Eigen::Vector3d &pw);
+
+class VISP_EXPORT MetricFrame
+{
+public:
+  //! Keyframe poses by id: false for a keyframe that has none (unknown, or its segment discarded).
+  using PoseLookup = std::function<bool(int, SE3d &)>;
+  //! The window's active points, SLAM world (their depths are what measures the tag's depth in the map).
+  using PointLookup = std::function<void(std::vector<Eigen::Vector3d> &)>;
+  //! Fewest map points inside a sighting's tag that measure its depth in the map.
+  static constexpr int kMinDepthPoints = 5;
+
+  //! No tag: nothing is fitted, current() is never metric.
+  MetricFrame() = default;
+  MetricFrame(const vpHSlamTag &tag, const vpHSlamParameters::TagFrame &options);
+  /*!
+    Describe the tag (or none) and forget every sighting; \e K: the rectified pinhole camera of the keyframe images
+    observeKeyframe() will get (the detector is made for it).
+  */
+  void setTag(const vpHSlamTag &tag, const vpHSlamParameters::TagFrame &options, const vpCameraParameters &K);
+  bool enabled() const; //!< a tag is described
+
+  /*!
+    A new keyframe: the tag is searched for in \e image (rectified, photometrically raw), its sightings stored, and the
+    fit made again with the keyframes' current poses. Nothing without a tag.
+  */
+  void observeKeyframe(int keyframeId, unsigned int segment, const vpImage<unsigned char> &image,
+                       const PoseLookup &keyframePose, const PointLookup &windowPoints = nullptr);
+  //! Mean tag detection time per keyframe so far, milliseconds.
+  double detectionMsMean() const;
+  //! \e trajectory (SLAM frame) in the output frame of the current fit.
+  vpHSlamTrajectory toOutput(const vpHSlamTrajectory &trajectory) const;
+
+  //! Sightings of keyframe \e keyframeId (segment \e segment), as the detector handed them on.
+  void addSightings(int keyframeId, unsigned int segment, const std::vector<TagSighting> &sightings);
+  /*!
+    Fit again with the keyframes' current poses: \e keyframePose(id, wMc) returns false for a keyframe that no longer
+    has one (discarded), whose sightings are then left out. With \e windowPoints, each sighting of the fitted
+    segment is also given the tag's depth in the map: the window's points that project inside the tag's corners in
+    that keyframe, their depth against the tag plane's metric depth there (median of the ratios, at least
+    kMinDepthPoints points; the newest measurement is kept, as the points converge).
+  */
+  void refit(const PoseLookup &keyframePose, const PointLookup &windowPoints = nullptr);
+  //! The last fit (thread-safe copy).
+  MetricFit current() const;
+  //! Sightings stored (all segments and ids).
+  unsigned int sightingCount() const;
+  //! Forget every sighting and the fit (reset()).
+  void clear();
+  vpHSlamTag tag() const; //!< the described tag (a copy; thread-safe)
+
+private:
+  struct Stored {
+    int keyframeId;
+    unsigned int segment;
+    int tagId;
+    SE3d cMt;
+    std::array<Eigen::Vector2d, 4> corners;
+    double depthScale; //!< 0 until measured
+    int depthPoints;
+  };
+  //! The depth measurement of refit() for one sighting; false with too few points.
+  bool measureDepthScale(const Stored &sighting, const SE3d &wMc, const std::vector<Eigen::Vector3d> &points,
+                         double &scale, int &count) const;
+  vpHSlamTag m_tag;
+  vpHSlamParameters::TagFrame m_options;
+  std::vector<Stored> m_sightings;
+  mutable std::mutex m_mutex; //!< guards the tag, the sightings, the fit and the timing
+  MetricFit m_fit;
+  std::mutex m_detectorMutex; //!< held while the detector runs or is replaced
+  std::unique_ptr<TagDetector> m_detector;
+  vpCameraParameters m_K; //!< of the keyframe images (pinhole)
+  double m_detectionMsTotal = 0.;
+  unsigned int m_detections = 0;
+};
+} // namespace hslam
+
+#endif
