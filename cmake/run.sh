@@ -27,10 +27,11 @@ jobs=${JOBS:-$(nproc)}
 # Debian packages the build, the tests and the demo need. Installed only when missing. clang, its sanitizer
 # runtimes (libclang-rt-dev, libFuzzer included) and LLVM's OpenMP (ViSP's flags ask for -fopenmp) serve the fuzz
 # targets of `test`; ccache lets the sanitizer pass re-use the normal build's test programs; doxygen the
-# documentation test, xvfb and xauth the live-window test (a virtual X server).
+# documentation test, xvfb and xauth the live-window test (a virtual X server); libapriltag-dev draws the AprilTag
+# the tag tests hang in the synthetic room (the module itself detects tags with ViSP's vpDetectorAprilTag).
 packages=(g++ cmake make pkg-config ccache libvisp-dev libopencv-dev libeigen3-dev libceres-dev libgtest-dev
   libbenchmark-dev libv4l-dev libzip-dev zlib1g-dev libjpeg-dev libpng-dev visp-images-data clang libclang-rt-dev
-  libomp-dev doxygen xvfb xauth)
+  libomp-dev doxygen xvfb xauth libapriltag-dev)
 
 if [ "${HSLAM_SKIP_INSTALL:-0}" != 1 ]; then
   missing=()

@@ -58,12 +58,14 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #   SystemMapFile.LocalizationOnlyTracksEveryFrame*: loading and localisation-only run in the two other map tests;
 #   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
 #   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
-#     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking.
+#     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking;
+#   SystemTag.*: three systems over 801 frames at 640x480 (2 minutes plain); the metric frame's code runs in
+#     map.MetricFrame.* and features.TagDetector.* (the detector on rendered tags, the fit on noisy sightings).
 long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|'
 long+='SystemReal\.(SevenScenes(CoveredLens|LongCover|EarlyCover)|TsukubaCover|KittiCarFound)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
 long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
-long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding'
+long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding|SystemTag\.'
 ctest --test-dir "$asan" -LE benchmark -E "$long" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== AddressSanitizer + UBSan: tests took $(($(date +%s) - start)) s"
 unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS OPENCV_VIDEOIO_PRIORITY_GPHOTO2 CXXFLAGS LDFLAGS

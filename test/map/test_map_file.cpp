@@ -115,6 +115,15 @@ MapSnapshot sampleMap(int keyframes, int pointsPerKeyframe, unsigned seed)
     e.consecutive = k % 2 == 0;
     map.edges.push_back(e);
   }
+  // A metric frame from a tag (version 3) whenever there is a map.
+  if (!ids.empty()) {
+    map.metric.present = true;
+    map.metric.tagFrame = seed % 2 == 1;
+    map.metric.segment = 0;
+    map.metric.oMw = randomPose(rng);
+    map.metric.scale = 0.1 + ui(rng);
+    map.metric.scaleUncertainty = 0.004;
+  }
   return map;
 }
 
@@ -175,6 +184,14 @@ void expectSameMap(const MapSnapshot &a, const MapSnapshot &b)
     EXPECT_EQ(a.edges[e].information, b.edges[e].information);
     EXPECT_EQ(a.edges[e].consecutive, b.edges[e].consecutive);
   }
+  EXPECT_EQ(a.metric.present, b.metric.present);
+  if (a.metric.present && b.metric.present) {
+    EXPECT_EQ(a.metric.tagFrame, b.metric.tagFrame);
+    EXPECT_EQ(a.metric.segment, b.metric.segment);
+    expectSamePose(a.metric.oMw, b.metric.oMw);
+    EXPECT_EQ(a.metric.scale, b.metric.scale);
+    EXPECT_EQ(a.metric.scaleUncertainty, b.metric.scaleUncertainty);
+  }
 }
 
 std::string readAll(const std::string &path)
@@ -231,27 +248,38 @@ TEST_F(MapFileTest, RoundTripIsExact)
   }
 }
 
-TEST_F(MapFileTest, VersionOneFilesAreStillRead)
+//! A version-3 file without a metric frame as the older version \e version would have written it: the same bytes
+//! but the version field and the metric frame's flag (one byte before the checksum).
+std::string asOlderVersion(std::string bytes, std::uint32_t version)
 {
-  // Version 1 had observer ids without pixels: without observers, a version-2 file is a version-1 file but for its
-  // version field, and reads back the same.
+  bytes.erase(bytes.size() - 9, 1);
+  putU32(bytes, 8, version);
+  return withChecksum(bytes);
+}
+
+TEST_F(MapFileTest, VersionOneAndTwoFilesAreStillRead)
+{
+  // Version 1 had observer ids without pixels, versions 1 and 2 no metric frame: without observers and a metric
+  // frame, a version-3 file is a version-1 or -2 file but for the version field and the metric flag.
   MapSnapshot map = sampleMap(3, 5, 2);
+  map.metric = hslam::MapMetricFrame();
   for (GlobalKeyframe &kf : map.keyframes) {
     for (GlobalPoint &p : kf.points) {
       p.observers.clear();
       p.observedAt.clear();
     }
   }
-  hslam::saveMapFile(path("v2.hmap"), map);
-  std::string bytes = readAll(path("v2.hmap"));
-  putU32(bytes, 8, 1);
-  writeAll(path("v1.hmap"), withChecksum(bytes));
+  hslam::saveMapFile(path("v3.hmap"), map);
+  writeAll(path("v1.hmap"), asOlderVersion(readAll(path("v3.hmap")), 1));
   expectSameMap(map, hslam::loadMapFile(path("v1.hmap")));
+  writeAll(path("v2.hmap"), asOlderVersion(readAll(path("v3.hmap")), 2));
+  expectSameMap(map, hslam::loadMapFile(path("v2.hmap")));
 
   // With observers the layouts differ: version-2 records read as version-1 ones are refused, not misread.
   MapSnapshot withObservers = sampleMap(3, 1, 2);
+  withObservers.metric = hslam::MapMetricFrame();
   hslam::saveMapFile(path("v2o.hmap"), withObservers);
-  std::string v2 = readAll(path("v2o.hmap"));
+  std::string v2 = asOlderVersion(readAll(path("v2o.hmap")), 2);
   putU32(v2, 8, 1);
   writeAll(path("v1o.hmap"), withChecksum(v2));
   EXPECT_THROW(hslam::loadMapFile(path("v1o.hmap")), vpHSlamException); // 12-byte observers read as 4-byte ones
@@ -289,9 +317,9 @@ TEST_F(MapFileTest, BadFilesGiveClearErrors)
   expectHSlamError(load, vpHSlamException::parseError, {"corrupt", "checksum"});
 
   std::string version = bytes;
-  putU32(version, 8, 3);
+  putU32(version, 8, 4);
   writeAll(bad, version);
-  expectHSlamError(load, vpHSlamException::unsupported, {"version 3", "versions 1 to 2"});
+  expectHSlamError(load, vpHSlamException::unsupported, {"version 4", "versions 1 to 3"});
   std::string descriptor = bytes;
   putU32(descriptor, 12, 64);
   writeAll(bad, descriptor);
@@ -340,6 +368,14 @@ TEST_F(MapFileTest, BadFilesGiveClearErrors)
   segment.keyframes[0].segment = -2;
   hslam::saveMapFile(bad, segment);
   expectHSlamError(load, vpHSlamException::parseError, {"segment"});
+  MapSnapshot scale = sampleMap(4, 10, 3);
+  scale.metric.scale = -1.;
+  hslam::saveMapFile(bad, scale);
+  expectHSlamError(load, vpHSlamException::parseError, {"metric frame"});
+  std::string flag = bytes;       // sampleMap(...) has a metric frame: its flag is 78 bytes before the checksum
+  flag[flag.size() - 8 - 78] = 7; // flag, tag frame, segment, pose, scale, uncertainty: 1 + 1 + 4 + 56 + 16
+  writeAll(bad, withChecksum(flag));
+  expectHSlamError(load, vpHSlamException::parseError, {"metric frame flag"});
 }
 
 TEST(MapFileGraph, RestoreGivesTheSameGraphAsTheSavedMap)

@@ -1,51 +1,18 @@
-// Metric poses from an AprilTag (vpHSlam::setTag, map/MetricFrame.h) on the synthetic room: the outward-looking
-// camera's two laps (640x480, 400 frames a lap) with a 20 cm tag36h11 on the right wall, filmed from about 2 m in
-// frames 60-115 of each lap. One system sees the tag on both laps; a second, fed the same first lap, sees the wall
-// without it on the second (the tag taken down). Both must end metric and in the tag's frame: the Sim(3) that best
-// aligns their trajectory onto the truth must be the identity within 1 % in scale, 1 cm and 0.5 degree.
-#include "HSlamTestTags.h"
-#include "SystemTestUtils.h"
+// Metric poses from an AprilTag (vpHSlam::setTag, map/MetricFrame.h) on the synthetic room (TagRoom.h): the camera
+// films a 20 cm tag for 2 seconds of each of its two laps. Seen only on the first lap, or on both, the output must
+// end metric and in the tag's frame: the Sim(3) that best aligns the trajectory onto the truth is the identity
+// within 1 % in scale, 1 cm and 0.5 degree (issue 53's acceptance), and seeing the tag again does not make it worse.
+#include "TagRoom.h"
 
-#include <visp3/core/vpThetaUVector.h>
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
 #include <iostream>
-
-namespace
-{
-constexpr unsigned int kLaps = 2, kFramesPerLap = 400, kFrames = kLaps * kFramesPerLap + 1;
-constexpr int kTagId = 5;
-constexpr double kTagSize = 0.2;
-
-struct FrameError {
-  double scale, metres, degrees, ateUnaligned;
-};
-
-//! How far the output frame is from the tag's: the Sim(3) aligning the estimate onto the truth, at the trajectory.
-FrameError frameError(const vpHSlamTrajectory &truth, const vpHSlamTrajectory &estimate)
-{
-  const vpHSlamTrajectoryEvaluator evaluator(truth, estimate, 0.001);
-  const vpHSlamTrajectoryEvaluator::AteResult sim3 = evaluator.computeAte(vpHSlamTrajectoryEvaluator::alignSim3);
-  // The alignment moves the estimate's centroid c to s R c + t: its distance to c is the frame's offset there.
-  vpColVector c(3, 0.);
-  for (const auto &m : evaluator.getMatches()) {
-    for (unsigned int k = 0; k < 3; ++k) {
-      c[k] += estimate.get_wMc(m.first)[k][3] / evaluator.getMatchedCount();
-    }
-  }
-  const vpColVector moved =
-      sim3.scale * (vpColVector(sim3.gMe.getRotationMatrix() * c)) + vpColVector(sim3.gMe.getTranslationVector());
-  FrameError e;
-  e.scale = std::fabs(sim3.scale - 1.);
-  e.metres = (moved - c).frobeniusNorm();
-  e.degrees = vpMath::deg(vpThetaUVector(sim3.gMe.getRotationMatrix()).getTheta());
-  e.ateUnaligned = evaluator.computeAte(vpHSlamTrajectoryEvaluator::alignNone).error.rmse;
-  return e;
-}
-} // namespace
+#include <unistd.h>
 
 TEST(SystemTag, TagMakesTheTrajectoryMetricAndInItsFrame)
 {
@@ -53,59 +20,74 @@ TEST(SystemTag, TagMakesTheTrajectoryMetricAndInItsFrame)
     GTEST_SKIP() << "visp-images-data not installed (/usr/share/visp-images-data/ViSP-images)";
   }
   HSLAM_REQUIRE_TAG_IMAGES();
-  vpHSlamSyntheticScene scene;
-  scene.setLaps(kLaps);
-  scene.setLookOutward(true);
-  scene.configure(640, 480, kFrames, 30., 1);
-  vpColVector centre(3);
-  centre[0] = 2.5;
-  centre[1] = -0.17;
-  centre[2] = 0.8;
-  const vpHomogeneousMatrix wMt = hslam_test::hangTag36h11(scene, kTagId, centre, kTagSize);
-
   if (std::getenv("HSLAM_TEST_DEBUG")) {
     vpHSlamLog::setSink(vpHSlamLog::stderrSink());
     vpHSlamLog::setLevel(vpHSlamLog::debug);
   }
   vpHSlamParameters params;
   params.system.deterministic = true;
-  vpHSlam both(hslam_test::syntheticCamera(scene), params), firstLapOnly(hslam_test::syntheticCamera(scene), params);
-  const vpHSlamTag tag("tag36h11", kTagSize, kTagId);
-  both.setTag(tag);
-  firstLapOnly.setTag(tag);
-  vpHSlamTrajectory truth; // in the tag's frame
-  vpImage<unsigned char> I;
-  for (unsigned int i = 0; i < kFrames; ++i) {
-    const double t = scene.getTimestamp(i);
-    truth.add(t, wMt.inverse() * scene.getPose(i));
-    scene.render(i, I);
-    both.track(I, t);
-    if (i >= kFramesPerLap) { // the second lap without the tag for the other system: one more render
-      scene.clearWallPictures();
-      scene.render(i, I);
-      hslam_test::hangTag36h11(scene, kTagId, centre, kTagSize);
-    }
-    firstLapOnly.track(I, t);
-  }
-  for (vpHSlam *slam : {&both, &firstLapOnly}) {
-    const bool isBoth = slam == &both;
-    const vpHSlam::Statistics s = slam->getStatistics();
-    const vpHSlam::WorldFrame w = slam->getWorldFrame();
-    const vpHSlamTrajectory estimate = slam->getTrajectory();
-    ASSERT_TRUE(w.metric) << (isBoth ? "both laps" : "first lap only") << ": " << w.sightings << " sightings, kept "
-                          << w.sightingsUsed << ", scale " << w.scale << " +- " << w.scaleUncertainty << ", rms "
-                          << w.rmsMetres << " m";
+  const std::string mapPath = ::testing::TempDir() + "/hslam_tag_room_" + std::to_string(::getpid()) + ".hmap";
+  const hslam_test::TagRoomRuns r = hslam_test::runTagRoom(params, mapPath);
+  for (const hslam_test::TagRoomRun *run : {&r.bothLaps, &r.firstLapOnly}) {
+    const char *name = run == &r.bothLaps ? "tag on both laps" : "tag on the first lap only";
+    const vpHSlam::WorldFrame &w = run->world;
+    const hslam_test::TagFrameError &e = run->error;
+    std::cout << name << ": tracked " << run->statistics.trackedFrames << "/" << hslam_test::kTagRoomFrames
+              << ", sightings " << w.sightings << " (kept " << w.sightingsUsed << "), scale error " << 100. * e.scale
+              << " %, frame offset " << 100. * e.metres << " cm, " << e.degrees << " deg; ATE without alignment "
+              << e.ateUnaligned << " m (Sim(3)-aligned " << e.ateSim3 << " m); scale +-" << 100. * w.scaleUncertainty
+              << " %" << std::endl;
+    ASSERT_TRUE(w.metric) << name << ": " << w.sightings << " sightings, kept " << w.sightingsUsed << ", scale "
+                          << w.scale << " +- " << w.scaleUncertainty;
     EXPECT_TRUE(w.tagFrame);
-    const FrameError e = frameError(truth, estimate);
-    std::cout << (isBoth ? "tag on both laps" : "tag on the first lap only") << ": tracked " << s.trackedFrames << "/"
-              << kFrames << ", loops " << s.loopsCorrected << ", sightings " << w.sightings << " (kept "
-              << w.sightingsUsed << "), scale error " << 100. * e.scale << " %, frame offset " << 100. * e.metres
-              << " cm, " << e.degrees << " deg; ATE without alignment " << e.ateUnaligned << " m; scale +-"
-              << 100. * w.scaleUncertainty << " %, detection " << s.tagDetectionMsMean << " ms per keyframe"
-              << std::endl;
-    EXPECT_GE(s.trackedFrames, kFrames - 20);
-    EXPECT_LT(e.scale, 0.01);
-    EXPECT_LT(e.metres, 0.01);
-    EXPECT_LT(e.degrees, 0.5);
+    EXPECT_GE(run->statistics.trackedFrames, hslam_test::kTagRoomFrames - 20);
+    EXPECT_LT(e.scale, 0.01) << name;
+    EXPECT_LT(e.metres, 0.01) << name;
+    EXPECT_LT(e.degrees, 0.5) << name;
   }
+  EXPECT_GT(r.bothLaps.world.sightings, r.firstLapOnly.world.sightings);
+  EXPECT_LE(r.bothLaps.error.ateUnaligned, r.firstLapOnly.error.ateUnaligned);
+  // Without a tag: not metric, and the outputs are the map's own (the same run as before the tag existed).
+  EXPECT_FALSE(r.noTag.world.metric);
+  EXPECT_EQ(r.noTag.statistics.tagSightings, 0u);
+
+  // The saved map keeps its metric frame: localisation-only in it is metric, in the tag's frame, from the first
+  // frame, without seeing the tag (frames 120-279 of the second lap: the tag is behind the camera).
+  vpHSlamSyntheticScene scene;
+  vpHomogeneousMatrix wMt;
+  vpColVector centre;
+  hslam_test::makeTagRoom(scene, wMt, centre);
+  vpHSlamParameters locate = params;
+  locate.system.localizationOnly = true;
+  vpHSlam locator(hslam_test::syntheticCamera(scene), locate);
+  locator.loadMap(mapPath);
+  EXPECT_TRUE(locator.isMetric());
+  EXPECT_TRUE(locator.getWorldFrame().tagFrame);
+  unsigned int located = 0;
+  vpHSlamTrajectory truth, estimate;
+  vpImage<unsigned char> I;
+  for (unsigned int i = hslam_test::kTagRoomFramesPerLap + 120; i < hslam_test::kTagRoomFramesPerLap + 280; ++i) {
+    scene.render(i, I);
+    if (locator.track(I, scene.getTimestamp(i)) != vpHSlam::stateTracking) {
+      continue;
+    }
+    ++located;
+    truth.add(scene.getTimestamp(i), wMt.inverse() * scene.getPose(i));
+    estimate.add(scene.getTimestamp(i), locator.get_cMw().inverse());
+  }
+  std::remove(mapPath.c_str());
+  ASSERT_GE(located, 150u);
+  // Metric and in the tag's frame. Measured: scale within 0.27 %, 2.9 cm without any alignment against 1.8 cm after a
+  // Sim(3) one: localisation-only's own noise in this lean map (the mapping run had 0.9 cm on these frames) is most
+  // of it. Bounds: the scale to 2 %, the unaligned error to 5 cm (a wrong frame is off by the tag's distance, 2 m).
+  const hslam_test::TagFrameError e = hslam_test::tagFrameError(truth, estimate);
+  std::cout << "localisation-only in the saved metric map: " << located << "/160 frames located; ATE without alignment "
+            << e.ateUnaligned << " m, Sim(3)-aligned " << e.ateSim3 << " m, scale error " << 100. * e.scale
+            << " %, frame offset " << 100. * e.metres << " cm, " << e.degrees << " deg" << std::endl;
+  const double t0 = truth.getTimestamp(0), t1 = truth.getTimestamp(truth.size() - 1);
+  const double mappingAte =
+      hslam_test::tagFrameError(r.truth.timeSpan(t0, t1), r.bothLaps.trajectory.timeSpan(t0, t1)).ateUnaligned;
+  std::cout << "mapping run on the same frames: ATE without alignment " << mappingAte << " m" << std::endl;
+  EXPECT_LT(e.scale, 0.02);
+  EXPECT_LT(e.ateUnaligned, 0.05);
 }

@@ -182,6 +182,14 @@ void saveMapFile(const std::string &path, const MapSnapshot &map)
     }
     w.u8(e.consecutive ? 1 : 0);
   }
+  w.u8(map.metric.present ? 1 : 0);
+  if (map.metric.present) {
+    w.u8(map.metric.tagFrame ? 1 : 0);
+    w.i32(map.metric.segment);
+    writePose(w, map.metric.oMw);
+    w.f64(map.metric.scale);
+    w.f64(map.metric.scaleUncertainty);
+  }
   w.u64(hashBytes(w.bytes().data(), w.bytes().size()));
   writeFileAtomically(path, w.bytes(), "map file");
 }
@@ -241,6 +249,29 @@ MapCamera readCamera(ByteReader &r, const std::string &path)
     corrupt(path, "invalid camera (size or focal length)");
   }
   return camera;
+}
+
+//! The metric-frame record (version 3), checked: a unit rotation, a positive finite scale, a segment below 2^30.
+void readMetricFrame(ByteReader &r, const std::string &path, MapMetricFrame &m)
+{
+  const std::uint8_t present = r.u8("the metric frame");
+  if (present > 1) {
+    corrupt(path, "invalid metric frame flag");
+  }
+  m.present = present == 1;
+  if (!m.present) {
+    return;
+  }
+  const std::uint8_t tagFrame = r.u8("the metric frame");
+  m.segment = r.i32("the metric frame");
+  m.oMw = readPose(r, path, "the metric frame");
+  m.scale = r.f64("the metric frame");
+  m.scaleUncertainty = r.f64("the metric frame");
+  if (tagFrame > 1 || m.segment < 0 || m.segment >= (1 << 30) || !(m.scale > 0.) || !std::isfinite(m.scale) ||
+      !(m.scaleUncertainty >= 0.) || !std::isfinite(m.scaleUncertainty)) {
+    corrupt(path, "invalid metric frame (flag, segment or scale)");
+  }
+  m.tagFrame = tagFrame == 1;
 }
 
 //! One keyframe record and its points; its id joins \e ids (an id already there is an error).
@@ -342,6 +373,9 @@ MapSnapshot parseMapFile(const std::string &bytes, const std::string &path)
   map.edges.resize(edges);
   for (PosePoseEdge &e : map.edges) {
     readEdge(r, ids, path, e);
+  }
+  if (version >= 3) {
+    readMetricFrame(r, path, map.metric);
   }
   if (r.remaining() != 0) {
     corrupt(path, std::to_string(r.remaining()) + " unexpected bytes before the checksum");

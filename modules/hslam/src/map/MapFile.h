@@ -6,11 +6,12 @@
   \brief H-SLAM's map file: the global map (keyframes kept lean, their points in inverse-depth form, the pose-pose
   edges) with the camera it was built with and the vocabulary it was indexed with. vpHSlam::saveMap / loadMap.
 
-  Layout (little-endian, common/BinaryIo.h), version 2 (version 1 is still read: observer ids without pixels):
+  Layout (little-endian, common/BinaryIo.h), version 3 (versions 1 and 2 are still read: 1 has observer ids without
+  pixels, 1 and 2 no metric frame):
   \verbatim
   offset  bytes  field
   0       8      magic "HSLAMMAP"
-  8       4      format version (2)
+  8       4      format version (3)
   12      4      descriptor bytes (32: 256-bit ORB)
   16      4+4    image width, height (rectified, pixels)
   24      4x8    fx, fy, cx, cy of the rectified pinhole camera the pixels and inverse depths refer to
@@ -23,6 +24,9 @@
                      per observer: id (i32), the pixel it saw the point at (u, v: 2 x f32, NaN if unknown)
   ...     4      pose-pose edge count, then per edge:
                    from, to (2 x i32), toMfrom (7 x f64), information (36 x f64, row-major), consecutive (u8)
+  ...     1      metric frame present (u8: 0 or 1; vpHSlam::setTag()), then if 1:
+                   tag frame (u8), segment (i32), oMw (qx qy qz qw tx ty tz: 7 x f64), scale, scale uncertainty
+                   (2 x f64): map points X of that segment are at scale oRw X + otw in metres
   end-8   8      checksum: hashBytes() of every byte before it
   \endverbatim
   Reading checks everything before anything is used: magic, version, descriptor size, checksum, counts against the
@@ -50,16 +54,27 @@ struct MapCamera {
   double fx = 0., fy = 0., cx = 0., cy = 0.;
 };
 
+//! The metric frame a map was given by a tag (map/MetricFrame.h), as the file keeps it.
+struct MapMetricFrame {
+  bool present = false;
+  bool tagFrame = false;        //!< the output frame is the tag's (else the map's axes, scaled)
+  int segment = 0;              //!< map segment it was fitted in
+  SE3d oMw;                     //!< rigid part of the similarity map -> output
+  double scale = 1.;            //!< metres per map unit
+  double scaleUncertainty = 1.; //!< relative standard deviation of scale
+};
+
 //! Everything a map file holds.
 struct MapSnapshot {
   MapCamera camera;
   std::uint64_t vocabularyId = 0; //!< 0: built without a vocabulary
   std::vector<GlobalKeyframe> keyframes;
   std::vector<PosePoseEdge> edges;
+  MapMetricFrame metric; //!< version 3; absent in older files
 };
 
 //! Current format version written by saveMapFile().
-constexpr std::uint32_t kMapFileVersion = 2;
+constexpr std::uint32_t kMapFileVersion = 3;
 //! Oldest version loadMapFile() still reads.
 constexpr std::uint32_t kOldestMapFileVersion = 1;
 

@@ -300,6 +300,34 @@ Eigen::Vector3d outputPoint(const MetricFit &fit, const Eigen::Vector3d &pw)
   return fit.metric ? Eigen::Vector3d(fit.mSw * pw) : pw;
 }
 
+MapMetricFrame toMapMetricFrame(const MetricFit &fit)
+{
+  MapMetricFrame m;
+  m.present = fit.metric;
+  if (fit.metric) {
+    m.tagFrame = fit.tagFrame;
+    m.segment = static_cast<int>(fit.segment);
+    m.oMw = SE3d(fit.mSw.unitQuaternion(), fit.mSw.translation());
+    m.scale = fit.mSw.scale();
+    m.scaleUncertainty = fit.scaleUncertainty;
+  }
+  return m;
+}
+
+MetricFit fromMapMetricFrame(const MapMetricFrame &frame)
+{
+  MetricFit fit;
+  if (frame.present) {
+    fit.metric = true;
+    fit.tagFrame = frame.tagFrame;
+    fit.segment = static_cast<unsigned int>(frame.segment);
+    fit.mSw = Sim3d(frame.oMw.unitQuaternion(), frame.oMw.translation(), frame.scale);
+    fit.scale = frame.scale;
+    fit.scaleUncertainty = frame.scaleUncertainty;
+  }
+  return fit;
+}
+
 MetricFrame::MetricFrame(const vpHSlamTag &tag, const vpHSlamParameters::TagFrame &options)
     : m_tag(tag), m_options(options)
 {
@@ -464,11 +492,13 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
       byTag[s.tagId].push_back(view);
     }
     bool first = true;
+    best.segment = segment;
     for (const auto &entry : byTag) {
       const MetricFit fit = fitMetricFrame(entry.second, tagFrame, options);
       if (first || (fit.metric && !best.metric) ||
           (fit.metric == best.metric && fit.scaleUncertainty < best.scaleUncertainty)) {
         best = fit;
+        best.segment = segment;
         first = false;
       }
     }
@@ -487,7 +517,13 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
 MetricFit MetricFrame::current() const
 {
   std::lock_guard<std::mutex> lock(m_mutex);
-  return m_fit;
+  return m_fit.metric || !m_loaded.metric ? m_fit : m_loaded;
+}
+
+void MetricFrame::setLoaded(const MetricFit &fit)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_loaded = fit;
 }
 
 unsigned int MetricFrame::sightingCount() const
@@ -501,5 +537,6 @@ void MetricFrame::clear()
   std::lock_guard<std::mutex> lock(m_mutex);
   m_sightings.clear();
   m_fit = MetricFit();
+  m_loaded = MetricFit();
 }
 } // namespace hslam

@@ -36,6 +36,7 @@
 #define HSLAM_MAP_METRIC_FRAME_H
 
 #include "features/TagDetector.h"
+#include "map/MapFile.h"
 #include "math/SE3.h"
 #include "math/Sim3.h"
 
@@ -70,6 +71,7 @@ struct MetricFit {
   double rmsMetres = 0.;         //!< RMS camera-centre residual of the kept sightings, metres
   double rotationSpreadDeg = 0.; //!< RMS angle of the kept sightings' rotations to the consensus, degrees
   double depthScale = 0.;        //!< the scale the map's points on the tag gave (0: none)
+  unsigned int segment = 0;      //!< map segment fitted (MetricFrame::refit: the newest with a sighting)
   unsigned int sightings = 0;    //!< sightings fitted (one segment, one tag)
   unsigned int kept = 0;         //!< of which kept (the others refused as outliers)
   std::vector<bool> inlier;      //!< per view given to fitMetricFrame()
@@ -89,6 +91,11 @@ VISP_EXPORT MetricFit fitMetricFrame(const std::vector<TagView> &views, bool tag
 VISP_EXPORT SE3d outputPose(const MetricFit &fit, const SE3d &wMc);
 //! The same for a point.
 VISP_EXPORT Eigen::Vector3d outputPoint(const MetricFit &fit, const Eigen::Vector3d &pw);
+
+//! A fit as a map file keeps it (present only when metric).
+VISP_EXPORT MapMetricFrame toMapMetricFrame(const MetricFit &fit);
+//! A map file's metric frame as a fit (metric when present).
+VISP_EXPORT MetricFit fromMapMetricFrame(const MapMetricFrame &frame);
 
 class VISP_EXPORT MetricFrame
 {
@@ -131,8 +138,13 @@ public:
     kMinDepthPoints points; the newest measurement is kept, as the points converge).
   */
   void refit(const PoseLookup &keyframePose, const PointLookup &windowPoints = nullptr);
-  //! The last fit (thread-safe copy).
+  //! The last fit, or the loaded one (setLoaded()) while there is none of its own (thread-safe copy).
   MetricFit current() const;
+  /*!
+    The metric frame of a loaded map (localisation-only runs, whose outputs are in the loaded map's coordinates): used
+    by current() until this run fits one of its own. Kept by setTag(); forgotten by clear().
+  */
+  void setLoaded(const MetricFit &fit);
   //! Sightings stored (all segments and ids).
   unsigned int sightingCount() const;
   //! Forget every sighting and the fit (reset()).
@@ -157,6 +169,7 @@ private:
   std::vector<Stored> m_sightings;
   mutable std::mutex m_mutex; //!< guards the tag, the sightings, the fit and the timing
   MetricFit m_fit;
+  MetricFit m_loaded;         //!< setLoaded()
   std::mutex m_detectorMutex; //!< held while the detector runs or is replaced
   std::unique_ptr<TagDetector> m_detector;
   vpCameraParameters m_K; //!< of the keyframe images (pinhole)

@@ -448,6 +448,7 @@ void SlamSystem::saveMap(const std::string &path)
   if (map.keyframes.empty()) {
     throw vpHSlamException(vpHSlamException::invalidArgument, path + ": no map to save yet (no keyframe)");
   }
+  map.metric = toMapMetricFrame(m_metricFrame.current());
   saveMapFile(path, map);
   VP_HSLAM_LOG(vpHSlamLog::info, "map saved to " << path << ": " << map.keyframes.size() << " keyframes, "
                                                  << map.edges.size() << " pose-pose edges");
@@ -467,6 +468,10 @@ void SlamSystem::loadMap(const std::string &path)
     lastId = std::max(lastId, kf.id);
   }
   const size_t keyframes = map.keyframes.size();
+  if (m_params.system.localizationOnly) {
+    // Frames are located in the loaded map's coordinates: its metric frame, if it has one, applies from the first.
+    m_metricFrame.setLoaded(fromMapMetricFrame(map.metric));
+  }
   {
     std::lock_guard<std::mutex> lock(m_mapperMutex);
     m_mapper->restoreMap(std::move(map.keyframes), std::move(map.edges));

@@ -36,6 +36,9 @@ const vpColor kTextColour(255, 255, 255);
 //! takes.
 const vpColor kMatchColour(255, 0, 255);
 
+//! The tag and the world axes: x red, y green, z blue (ViSP's frame colours).
+const vpColor kTagColour(255, 200, 0);
+
 //! ViSP's bitmap font (its TrueType path is unreliable in 3.5, see TrajectoryPlot.cpp).
 vpFont &font()
 {
@@ -52,6 +55,46 @@ void fill(vpImage<vpRGBa> &I, unsigned int u0, unsigned int v0, unsigned int w, 
       I[v][u] = rgba;
     }
   }
+}
+
+/*!
+  With a metric frame: where the system places the tag, projected by the current pose (its black square, yellow) and
+  the output frame's axes at its origin, one tag size long (x red, y green, z blue); nothing otherwise. In the tag's
+  frame the origin is the tag's centre, so a drift of the estimate shows as the drawing sliding off the printed tag.
+*/
+void drawWorldFrame(const vpHSlam &slam, vpImage<vpRGBa> &canvas)
+{
+  const vpHSlam::WorldFrame world = slam.getWorldFrame();
+  const vpHSlamTag tag = slam.getTag();
+  if (!world.metric || !tag.isSet()) {
+    return;
+  }
+  const vpHomogeneousMatrix cMw = slam.get_cMw();
+  const vpCameraParameters K = slam.getCameraParameters();
+  const double a = tag.getSize();
+  bool visible = true;
+  auto project = [&](double x, double y, double z) {
+    const vpColVector X = cMw * vpColVector({x, y, z, 1.});
+    visible = visible && X[2] > 0.;
+    vpImagePoint ip;
+    vpMeterPixelConversion::convertPoint(K, X[0] / X[2], X[1] / X[2], ip);
+    return ip;
+  };
+  const vpImagePoint o = project(0., 0., 0.), ax = project(a, 0., 0.), ay = project(0., a, 0.), az = project(0., 0., a);
+  std::vector<vpImagePoint> square;
+  if (world.tagFrame) {
+    const double h = 0.5 * a;
+    square = {project(-h, -h, 0.), project(h, -h, 0.), project(h, h, 0.), project(-h, h, 0.)};
+  }
+  if (!visible) {
+    return;
+  }
+  for (size_t k = 0; k < square.size(); ++k) {
+    vpImageDraw::drawLine(canvas, square[k], square[(k + 1) % square.size()], kTagColour, 2);
+  }
+  vpImageDraw::drawArrow(canvas, o, ax, vpColor::red, 4, 2, 2);
+  vpImageDraw::drawArrow(canvas, o, ay, vpColor::green, 4, 2, 2);
+  vpImageDraw::drawArrow(canvas, o, az, vpColor::blue, 4, 2, 2);
 }
 
 void drawPoints(const vpHSlam &slam, vpImage<vpRGBa> &canvas)
@@ -196,6 +239,7 @@ void vpHSlamLiveView::draw(const vpHSlam &slam, unsigned int frameIndex, double 
   }
   if (slam.getState() == vpHSlam::stateTracking) {
     drawPoints(slam, canvas);
+    drawWorldFrame(slam, canvas);
   }
   // Empty in direct mode and for a frame not tracked; drawn over the points, whose markers they may share.
   const std::vector<vpImagePoint> matches = slam.getDescriptorMatches();
@@ -222,6 +266,10 @@ void vpHSlamLiveView::draw(const vpHSlam &slam, unsigned int frameIndex, double 
     write("  direct", statusColour); // adaptive tracking kept the photometric pose alone for this frame
   } else if (mode != vpHSlamParameters::trackingDirect) {
     write("  + orb " + std::to_string(matches.size()), kMatchColour); // the geometric term was used
+  }
+  if (slam.getTag().isSet()) {
+    // Metres once the tag's fit is trusted (the tag drawn where the system places it), else how far it is.
+    write(slam.isMetric() ? "  metric" : "  tag " + std::to_string(s.tagSightings), kTagColour);
   }
   if (!hint.empty()) {
     write("  " + hint, statusColour);

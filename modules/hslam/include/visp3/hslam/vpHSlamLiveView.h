@@ -28,7 +28,10 @@ class vpHSlam;
   visible points), the keypoints the last frame matched by ORB descriptor (vpHSlam::getDescriptorMatches(), hybrid
   and indirect tracking) as small magenta crosses, and a status line (frame, state, frame rate, active points,
   keyframes, in magenta "+ orb N" with the number of those matches unless tracking is direct (adaptive tracking: only
-  for a frame that used them, "direct" in white otherwise), and an optional hint such as the keys of the program).
+  for a frame that used them, "direct" in white otherwise), with a tag (vpHSlam::setTag()) in yellow "metric" or
+  "tag N" (its sightings so far), and an optional hint such as the keys of the program). Once the outputs are metric,
+  the tag's black square as the system places it (yellow; tag frame only) and the output frame's axes at its origin,
+  one tag size long (x red, y green, z blue), are drawn over the image.
   Right: a top view of the world (x right, z up in the picture) with the trajectory of every tracked frame (green), the
   keyframes (blue squares, filled while in the optimisation window) and the current camera with its viewing direction
   (red).
