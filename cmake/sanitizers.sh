@@ -56,7 +56,8 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 #     SystemSynthetic.RealTimeHybridCoveredLens*: relocalisation runs in SystemSynthetic.CoveredLensIsRelocalised-
 #     InTheSameMap and RecoversFromLostTracking (the real-time one runs under ThreadSanitizer below);
 #   SystemMapFile.LocalizationOnlyTracksEveryFrame*: loading and localisation-only run in the two other map tests;
-#   ServoTutorial.ConvergesFromAnotherStartWithImageNoise: the same program as ConvergesToTheGoalWithSlamInTheLoop;
+#   ServoTutorial.ConvergesFromAnotherStartWithImageNoise, ServoTutorial.TagMode*: the same program as
+#     ConvergesToTheGoalWithSlamInTheLoop (tag mode adds the metric frame, run by map.MetricFrame.*);
 #   SystemGlobalMap.TurnInPlaceWithoutSeeding*: TurnInPlaceIsSeededAgain* with the seeding off; the timeout and the
 #     new segment it ends in run in SystemSynthetic.RecoversFromLostTracking;
 #   SystemTag.*: three systems over 801 frames at 640x480 (2 minutes plain); the metric frame's code runs in
@@ -64,7 +65,7 @@ export CXXFLAGS="-fsanitize=address,undefined" LDFLAGS="-fsanitize=address,undef
 long='SystemLoop\.(OutwardLoopIsClosed|NoFalseLoop)|'
 long+='SystemReal\.(SevenScenes(CoveredLens|LongCover|EarlyCover)|TsukubaCover|KittiCarFound)|'
 long+='SystemSynthetic\.(CoveredLensIsRelocalisedWithDirectTracking|RealTimeHybridCoveredLens)|'
-long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.ConvergesFromAnotherStart|'
+long+='SystemMapFile\.LocalizationOnlyTracksEveryFrame|ServoTutorial\.(ConvergesFromAnotherStart|TagMode)|'
 long+='SystemGlobalMap\.TurnInPlaceWithoutSeeding|SystemTag\.'
 ctest --test-dir "$asan" -LE benchmark -E "$long" --output-on-failure -j "$jobs" --timeout "$timeout" --no-tests=error
 echo "== AddressSanitizer + UBSan: tests took $(($(date +%s) - start)) s"

@@ -6,8 +6,10 @@
 //!
 //!   ./tutorial-hslam-servo --plot servo.png
 //!   ./tutorial-hslam-servo --width 480 --height 360 --goal-translation 0.15,0,0.15 --goal-rotation 0,-8,0
+//!   ./tutorial-hslam-servo --tag 0.3 --tag-goal-translation 0,0,1.2 --tag-goal-rotation 180,0,0
 #include "servo/HSlamServoSimulation.h"
 #include "servo/ServoErrorPlot.h"
+#include "servo/TagPicture.h"
 
 #include <visp3/core/vpException.h>
 #include <visp3/core/vpThetaUVector.h>
@@ -28,6 +30,7 @@ void usage(const char *program)
   const vpThetaUVector tu(d.c0Mcd.getRotationMatrix());
   std::cout << "Usage: " << program
             << " [--plot FILE.png] [--goal-translation X,Y,Z] [--goal-rotation X,Y,Z]\n"
+               "       [--tag SIZE [--tag-goal-translation X,Y,Z --tag-goal-rotation X,Y,Z]]\n"
                "       [--width W --height H] [--seed S] [--noise SIGMA] [--init-frames N] [--init-radius R]\n"
                "       [--gain-zero L0] [--gain-infinity LI] [--gain-slope S] [--max-step-m M] [--max-step-deg D]\n"
                "       [--max-iterations N] [--converged-m M] [--converged-deg D] [--config FILE.yaml]\n"
@@ -55,6 +58,14 @@ path do), then s and t are the least-squares fit of the camera centres for that 
 pose maps into the simulator's frame as orientation R eRc, centre s R etc + t. The fit is never
 refreshed: SLAM drift after it shows up as servo error.
 
+Tag mode (--tag SIZE): instead, a tag36h11 (id 0, black square SIZE metres) hangs on the wall the start
+camera faces, and vpHSlam::setTag() makes the SLAM's poses metric and expressed in the tag's frame (x
+right, y up as printed, z out of the wall) from its sightings in keyframes: the semicircle is still
+driven (a monocular map needs motion to start) but its known poses are not used, and the goal is
+given in the tag's frame (--tag-goal-translation/rotation; default: the same physical goal as the
+semicircle mode's, so the two modes can be compared). The run fails if the poses are not metric by
+the end of the path.
+
 Ground truth only reports: the servo error (camera to goal) and the SLAM error (SLAM pose to
 simulator pose), translation in metres and rotation in degrees. Converged: the error measured by
 the SLAM below --converged-m and --converged-deg for )"
@@ -67,6 +78,10 @@ converged, 1 otherwise.
             << d.c0Mcd[0][3] << "," << d.c0Mcd[1][3] << "," << d.c0Mcd[2][3] << "\n"
             << "  --goal-rotation X,Y,Z     goal orientation in that frame, theta u in degrees, default "
             << vpMath::deg(tu[0]) << "," << vpMath::deg(tu[1]) << "," << vpMath::deg(tu[2]) << "\n"
+            << "  --tag SIZE                tag mode: the tag's black square, metres (0.3 shows it about 50 pixels\n"
+               "                            wide from the start); needs a build with libapriltag-dev\n"
+            << "  --tag-goal-translation X,Y,Z  tag mode: the goal's position in the tag's frame, metres\n"
+            << "  --tag-goal-rotation X,Y,Z     tag mode: its orientation in the tag's frame, theta u in degrees\n"
             << "  --width W, --height H     image size, default " << d.width << "x" << d.height
             << " (the initialisation needs about 480x360 or more)\n"
             << "  --seed S                  synthetic scene seed (moves the start pose), default " << d.sceneSeed
@@ -124,6 +139,9 @@ struct Options {
   unsigned int printEvery = 1;
   double goalT[3] = {0., 0., 0.};
   double goalR[3] = {0., 0., 0.};
+  bool tagGoalT = false, tagGoalR = false; //!< the tag-frame goal was given
+  double tagGoalTranslation[3] = {0., 0., 0.};
+  double tagGoalRotation[3] = {0., 0., 0.};
 };
 
 //! One "--option value" pair into \e options; false with a message on stderr when unknown or a bad value.
@@ -139,6 +157,12 @@ bool parseOption(const std::string &arg, const std::string &value, Options &opti
     ok = parseTriple(value, options.goalT);
   } else if (arg == "--goal-rotation") {
     ok = parseTriple(value, options.goalR);
+  } else if (arg == "--tag") {
+    ok = parseDouble(value, settings.tagSize) && settings.tagSize > 0.;
+  } else if (arg == "--tag-goal-translation") {
+    ok = options.tagGoalT = parseTriple(value, options.tagGoalTranslation);
+  } else if (arg == "--tag-goal-rotation") {
+    ok = options.tagGoalR = parseTriple(value, options.tagGoalRotation);
   } else if (arg == "--width") {
     ok = parseUnsigned(value, settings.width);
   } else if (arg == "--height") {
@@ -206,6 +230,35 @@ int parseCommandLine(int argc, char **argv, Options &options)
   return -1;
 }
 
+/*!
+  Tag mode's settings from the options: the tag's picture (libapriltag) and the goal in its frame. False with a
+  message when they cannot be used.
+*/
+bool configureTagMode(Options &options)
+{
+  hslam_servo::ServoSettings &settings = options.settings;
+  if (settings.tagSize <= 0.) {
+    if (options.tagGoalT || options.tagGoalR) {
+      std::cerr << "--tag-goal-translation and --tag-goal-rotation need --tag SIZE\n";
+      return false;
+    }
+    return true;
+  }
+  if (!hslam_tag::canDrawTags()) {
+    std::cerr << "--tag: this build cannot draw the tag (Debian libapriltag-dev was not found at build time)\n";
+    return false;
+  }
+  settings.tagPicture = hslam_tag::tag36h11Image(settings.tagId, settings.tagBlackCells);
+  if (options.tagGoalT != options.tagGoalR) {
+    std::cerr << "--tag-goal-translation and --tag-goal-rotation go together\n";
+    return false;
+  }
+  settings.goalInTagFrame = options.tagGoalT;
+  const double *t = options.tagGoalTranslation, *r = options.tagGoalRotation;
+  settings.tMcd = vpHomogeneousMatrix(t[0], t[1], t[2], vpMath::rad(r[0]), vpMath::rad(r[1]), vpMath::rad(r[2]));
+  return true;
+}
+
 //! One line per printed sample: errors, SLAM error and speed while servoing, the SLAM state otherwise.
 void printSample(const hslam_servo::ServoSample &s)
 {
@@ -240,7 +293,8 @@ void writePlot(const std::string &plot, const hslam_servo::ServoResult &result)
 void printSummary(const hslam_servo::ServoResult &result, double seconds)
 {
   const hslam_servo::ServoSample &last = result.samples.back();
-  std::cout << "converged=" << (result.converged ? 1 : 0) << "\n";
+  std::cout << "converged=" << (result.converged ? 1 : 0) << "\nmode=" << (result.tagMode ? "tag" : "semicircle")
+            << "\n";
   if (!result.failure.empty()) {
     std::cout << "failure=" << result.failure << "\n";
   }
@@ -270,6 +324,9 @@ int main(int argc, char **argv)
     settings.slam.system.deterministic = true; // the closed loop runs in simulated time
     settings.c0Mcd = vpHomogeneousMatrix(goalT[0], goalT[1], goalT[2], vpMath::rad(goalR[0]), vpMath::rad(goalR[1]),
                                          vpMath::rad(goalR[2]));
+    if (!configureTagMode(options)) {
+      return EXIT_FAILURE;
+    }
     std::cout << "Goal in the starting camera frame: t = (" << goalT[0] << ", " << goalT[1] << ", " << goalT[2]
               << ") m, theta u = (" << goalR[0] << ", " << goalR[1] << ", " << goalR[2] << ") deg\n"
               << "Images " << settings.width << "x" << settings.height
@@ -284,6 +341,12 @@ int main(int argc, char **argv)
       }
     });
     const double seconds = 1e-3 * (vpTime::measureTimeMs() - start);
+    if (result.tagMode) {
+      const vpThetaUVector tu(result.tMcd.getRotationMatrix());
+      std::cout << "Tag mode: goal in the tag's frame t = (" << result.tMcd[0][3] << ", " << result.tMcd[1][3] << ", "
+                << result.tMcd[2][3] << ") m, theta u = (" << vpMath::deg(tu[0]) << ", " << vpMath::deg(tu[1]) << ", "
+                << vpMath::deg(tu[2]) << ") deg\n";
+    }
     if (!options.plot.empty() && result.samples.size() >= 2) {
       writePlot(options.plot, result);
     }

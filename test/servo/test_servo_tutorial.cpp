@@ -164,6 +164,38 @@ TEST(ServoTutorial, ConvergesFromAnotherStartWithImageNoise)
   expectConvergence(program, "--seed 5 --noise 2"); // measured: 80 iterations, 0.75 mm, 0.003 degrees
 }
 
+// Tag mode: the scale and frame come from a 40 cm tag on the wall, about 3.3 m away (vpHSlam::setTag), instead of
+// the semicircle's known poses. The goal is the semicircle mode's physical goal, given in the tag's frame: the servo
+// must converge at least as fast (same path, same law: measured 80 iterations in both modes, 10 % allowed). Where
+// it stops is where the tag's frame says the goal is: measured 7.1 mm and 0.78 degree from the true goal, the
+// frame's own error after three keyframe sightings of a 45-pixel tag in the 1.5 s path (the semicircle mode's
+// frame comes from the simulator's exact poses: 1.2 mm, 0.01 degree). The 5 mm and 0.1 degree are NOT
+// reached (docs/metric-tag-frame.md); the bounds here, 2 cm and 1.5 degrees, catch a frame that is wrong.
+TEST(ServoTutorial, TagModeConvergesToAGoalInTheTagFrameAsFastAsTheSemicircle)
+{
+  HSLAM_REQUIRE_SERVO_TUTORIAL(program);
+  HSLAM_REQUIRE_VISP_IMAGES();
+  const std::string common = "--width 480 --height 360 --print-every 20 --plot '' --seed 1 ";
+  const hslam_test::ProgramRun tag = hslam_test::runProgram(program, common + "--tag 0.4");
+  if (tag.output.find("cannot draw the tag") != std::string::npos) {
+    GTEST_SKIP() << "libapriltag-dev not found at build time: tutorial-hslam-servo has no tag mode";
+  }
+  ASSERT_EQ(tag.exitCode, 0) << tag.output;
+  EXPECT_NE(tag.output.find("mode=tag"), std::string::npos) << tag.output;
+  EXPECT_EQ(valueOf(tag.output, "converged"), 1.) << tag.output;
+  EXPECT_LT(valueOf(tag.output, "final_translation_error_m"), 0.02) << tag.output;
+  EXPECT_LT(valueOf(tag.output, "final_rotation_error_deg"), 1.5) << tag.output;
+  const hslam_test::ProgramRun semicircle = hslam_test::runProgram(program, common);
+  ASSERT_EQ(semicircle.exitCode, 0) << semicircle.output;
+  const double tagIterations = valueOf(tag.output, "iterations");
+  const double semicircleIterations = valueOf(semicircle.output, "iterations");
+  std::cout << "tag mode: " << tagIterations << " iterations, final error "
+            << valueOf(tag.output, "final_translation_error_m") << " m "
+            << valueOf(tag.output, "final_rotation_error_deg") << " deg; semicircle: " << semicircleIterations
+            << " iterations, " << valueOf(semicircle.output, "final_translation_error_m") << " m" << std::endl;
+  EXPECT_LE(tagIterations, 1.1 * semicircleIterations);
+}
+
 TEST(ServoTutorial, RefusesBadOptions)
 {
   HSLAM_REQUIRE_SERVO_TUTORIAL(program);
@@ -177,6 +209,12 @@ TEST(ServoTutorial, RefusesBadOptions)
   const hslam_test::ProgramRun fast = hslam_test::runProgram(program, "--init-frames 10 --init-radius 0.3 --plot ''");
   EXPECT_EQ(fast.exitCode, 1) << fast.output;
   EXPECT_NE(fast.output.find("initialisation path would move"), std::string::npos) << fast.output;
+  const hslam_test::ProgramRun tagGoal = hslam_test::runProgram(program, "--tag-goal-translation 0,0,1 --plot ''");
+  EXPECT_EQ(tagGoal.exitCode, 1) << tagGoal.output;
+  EXPECT_NE(tagGoal.output.find("need --tag"), std::string::npos) << tagGoal.output;
+  const hslam_test::ProgramRun badTag = hslam_test::runProgram(program, "--tag -0.2");
+  EXPECT_EQ(badTag.exitCode, 1) << badTag.output;
+  EXPECT_NE(badTag.output.find("Bad value for --tag"), std::string::npos) << badTag.output;
   const hslam_test::ProgramRun help = hslam_test::runProgram(program, "--help");
   EXPECT_EQ(help.exitCode, 0);
   EXPECT_NE(help.output.find("Sim(3)"), std::string::npos) << "the help explains how the scale is fixed";

@@ -27,6 +27,8 @@ constexpr unsigned int kSceneFrames = 300;
 //! Largest step per frame of the initialisation path, metres: the synthetic sequences' bound (2 cm), which the
 //! direct tracker is tested on. Its peak step is radius pi^2 / (2 frames), see initialisationVelocity().
 constexpr double kMaxInitStepMetres = 0.02;
+//! Tag mode: a point of the tag seen farther than this from where it hangs is hidden (metres).
+constexpr double kTagOcclusionMetres = 0.01;
 //! The Sim(3) alignment needs at least this share of the initialisation frames to have a SLAM pose.
 constexpr double kMinAlignedShare = 0.5;
 
@@ -97,10 +99,10 @@ void checkSettings(const ServoSettings &s)
   if (!(s.fps > 0.) || s.initFrames < 10 || !(s.initRadiusMetres > 0.) || !(s.maxStepMetres > 0.) ||
       !(s.maxStepDegrees > 0.) || !(s.gainAtZero > 0.) || !(s.gainAtInfinity > 0.) ||
       !(s.gainAtZero >= s.gainAtInfinity) || !(s.gainSlopeAtZero > 0.) || s.convergedFrames == 0 ||
-      !(s.convergedMetres > 0.) || !(s.convergedDegrees > 0.)) {
+      !(s.convergedMetres > 0.) || !(s.convergedDegrees > 0.) || !(s.tagSize >= 0.) || s.tagId < 0) {
     throw vpException(vpException::badValue,
                       "servo settings: need fps > 0, at least 10 initialisation frames, positive radius, bounds, "
-                      "thresholds and gains, and gain at zero >= gain at infinity");
+                      "thresholds and gains, gain at zero >= gain at infinity, and a tag size >= 0 with an id >= 0");
   }
   const double initPeakStep = s.initRadiusMetres * M_PI * M_PI / (2. * s.initFrames);
   if (initPeakStep > kMaxInitStepMetres) {
@@ -123,6 +125,97 @@ void configureScene(vpHSlamSyntheticScene &scene, const ServoSettings &settings)
   vpHSlamSyntheticScene::Effects effects;
   effects.noiseSigma = settings.noiseSigma;
   scene.configure(settings.width, settings.height, kSceneFrames, settings.fps, settings.sceneSeed, effects);
+}
+
+/*!
+  True when the tag at \e wMt (white margin included: \e halfWidth metres from its centre) is seen whole from the start
+  camera: every point of a grid over it is the surface its pixel sees (nothing in front, inside the image).
+*/
+bool tagSeenWhole(const vpHSlamSyntheticScene &scene, const vpHomogeneousMatrix &wMt, double halfWidth)
+{
+  const vpHomogeneousMatrix cMw = scene.getPose(0).inverse();
+  const vpCameraParameters K = scene.getCameraParameters();
+  constexpr int kGrid = 4;
+  for (int i = -kGrid; i <= kGrid; ++i) {
+    for (int j = -kGrid; j <= kGrid; ++j) {
+      const vpColVector Pw = wMt * vpColVector({halfWidth * i / kGrid, halfWidth * j / kGrid, 0., 1.});
+      const vpColVector Pc = cMw * Pw;
+      if (Pc[2] <= 0.) {
+        return false;
+      }
+      const double u = K.get_u0() + K.get_px() * Pc[0] / Pc[2], v = K.get_v0() + K.get_py() * Pc[1] / Pc[2];
+      if (u < 0. || v < 0. || u > scene.getWidth() - 1. || v > scene.getHeight() - 1.) {
+        return false;
+      }
+      const vpColVector seen = scene.worldPointAt(u, v, 0);
+      double d = 0.;
+      for (unsigned int k = 0; k < 3; ++k) {
+        d += (seen[k] - Pw[k]) * (seen[k] - Pw[k]);
+      }
+      if (d > kTagOcclusionMetres * kTagOcclusionMetres) {
+        return false; // something stands in front (the pillar)
+      }
+    }
+  }
+  return true;
+}
+
+/*!
+  Tag mode: the tag hung on the wall the start camera faces, as near the image centre as it is seen whole (the
+  pillar may stand in front of the centre): pixels tried outward from the centre on a coarse grid. Returns wMt.
+*/
+vpHomogeneousMatrix hangTagInView(vpHSlamSyntheticScene &scene, const ServoSettings &settings)
+{
+  if (settings.tagPicture.getSize() == 0 || settings.tagBlackCells == 0) {
+    throw vpException(vpException::badValue, "servo settings: tag mode needs the tag's picture");
+  }
+  const double u0 = 0.5 * (scene.getWidth() - 1), v0 = 0.5 * (scene.getHeight() - 1);
+  const double step = scene.getWidth() / 16.;
+  for (int ring = 0; ring < 6; ++ring) {
+    for (int dv = -ring; dv <= ring; ++dv) {
+      for (int du = -ring; du <= ring; ++du) {
+        if (std::max(std::abs(du), std::abs(dv)) != ring) {
+          continue;
+        }
+        try {
+          const vpColVector centre = scene.worldPointAt(u0 + du * step, v0 + dv * step, 0);
+          const vpHomogeneousMatrix wMt =
+              scene.addWallTag(settings.tagPicture, settings.tagBlackCells, centre, settings.tagSize);
+          if (tagSeenWhole(scene, wMt,
+                           0.5 * settings.tagSize * settings.tagPicture.getWidth() / settings.tagBlackCells)) {
+            return wMt;
+          }
+          scene.clearWallPictures();
+        } catch (const vpException &) {
+          // not on a wall (a box, the floor) or too close to a corner: the next pixel
+        }
+      }
+    }
+  }
+  throw vpException(vpException::badValue, "servo: no wall in view of the start camera to hang the tag on");
+}
+
+/*!
+  Tag mode, at the end of the initialisation path: the SLAM's poses are metric and in the tag's frame, so the map
+  from them to the simulator's world is the tag's pose there (scale 1). False, with result.failure, when they are not.
+*/
+bool alignSlamToTag(const vpHSlam &slam, const vpHomogeneousMatrix &wMt, const ServoSample &sample, ServoResult &result,
+                    Sim3 &sim3)
+{
+  const vpHSlam::WorldFrame world = slam.getWorldFrame();
+  if (sample.state != vpHSlam::stateTracking || !world.metric || !world.tagFrame) {
+    result.failure = "the tag did not make the SLAM's poses metric on the initialisation path (state " +
+                     vpHSlam::stateName(sample.state) + ", " + std::to_string(world.sightings) +
+                     " sightings of the tag in keyframes)";
+    return false;
+  }
+  sim3.gMe = wMt;
+  sim3.scale = 1.;
+  result.initialised = true;
+  result.alignmentScale = world.scale;
+  result.alignmentRmseMetres = world.rmsMetres;
+  result.alignmentPoses = world.sightingsUsed;
+  return true;
 }
 
 //! The free-flying camera at \e wMc0. Its own velocity saturation (per component, with a message on stdout) is set
@@ -250,7 +343,16 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
 
   const double dt = 1. / settings.fps;
   const vpHomogeneousMatrix wMc0 = scene.getPose(0);
-  const vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
+  vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
+  vpHomogeneousMatrix wMt; // tag mode: the tag's pose in the simulator's world
+  result.tagMode = settings.tagSize > 0.;
+  if (result.tagMode) {
+    wMt = hangTagInView(scene, settings);
+    if (settings.goalInTagFrame) {
+      wMcd = wMt * settings.tMcd;
+    }
+    result.tMcd = wMt.inverse() * wMcd;
+  }
   const vpHomogeneousMatrix cdMw = wMcd.inverse();
 
   const double maxSpeed = settings.maxStepMetres / dt, maxRate = vpMath::rad(settings.maxStepDegrees) / dt;
@@ -263,6 +365,9 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
   configureTask(task, t, td, tu, tud, settings);
 
   vpHSlam slam(pinholeCamera(scene), settings.slam);
+  if (result.tagMode) {
+    slam.setTag(vpHSlamTag("tag36h11", settings.tagSize, settings.tagId));
+  }
   vpHSlamTrajectory truth; // simulator poses of the frames seen so far (for the alignment)
   Sim3 sim3;               // SLAM world e to simulator world g, once aligned
   unsigned int untracked = 0, streak = 0;
@@ -285,7 +390,9 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
     const PoseError servoError = poseError(cdMw * wMc);
     sample.servoErrorMetres = servoError.metres;
     sample.servoErrorDegrees = servoError.degrees;
-    if (k == settings.initFrames && !alignSlamToSimulator(slam, truth, sample, settings, result, sim3)) {
+    if (k == settings.initFrames &&
+        !(result.tagMode ? alignSlamToTag(slam, wMt, sample, result, sim3)
+                         : alignSlamToSimulator(slam, truth, sample, settings, result, sim3))) {
       record(sample);
       return result;
     }

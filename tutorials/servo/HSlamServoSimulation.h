@@ -6,6 +6,7 @@
 
 #include <visp3/core/vpColVector.h>
 #include <visp3/core/vpHomogeneousMatrix.h>
+#include <visp3/core/vpImage.h>
 #include <visp3/hslam/vpHSlam.h>
 #include <visp3/hslam/vpHSlamParameters.h>
 
@@ -30,6 +31,20 @@ struct ServoSettings {
   //! Initialisation path: a semicircle in the camera's x-y plane (no rotation), this many frames long.
   unsigned int initFrames = 45;
   double initRadiusMetres = 0.12; //!< radius of that semicircle: the camera ends 2 x radius below its start
+
+  /*!
+    Tag mode (tutorial-hslam-servo --tag SIZE): > 0 hangs a tag36h11 whose black square is this many metres on the
+    wall the start camera faces, and the SLAM's metric frame from it (vpHSlam::setTag, docs/metric-tag-frame.md)
+    replaces the semicircle's Sim(3): the SLAM pose is used as it comes, in metres in the tag's frame, and the goal is
+    given in that frame (tMcd). The camera still follows the initialisation path (a monocular map needs the motion),
+    but its known poses are not used. 0 (default): the semicircle mode.
+  */
+  double tagSize = 0.;
+  int tagId = 0;                     //!< tag mode: the tag's id (its frame is the world's)
+  vpImage<unsigned char> tagPicture; //!< tag mode: the tag as printed (tutorials/servo/TagPicture.h)
+  unsigned int tagBlackCells = 0;    //!< tag mode: cells its black square spans
+  bool goalInTagFrame = false;       //!< tag mode: tMcd is the goal; false: c0Mcd's goal, expressed in the tag
+  vpHomogeneousMatrix tMcd;          //!< tag mode: desired camera pose in the tag's frame (goalInTagFrame)
 
   //! Desired camera pose, expressed in the camera frame at the very start (before the initialisation path).
   vpHomogeneousMatrix c0Mcd = vpHomogeneousMatrix(0.25, -0.05, 0.30, 0., vpMath::rad(-12.), vpMath::rad(4.));
@@ -90,14 +105,17 @@ struct ServoSample {
 
 //! Outcome of a run.
 struct ServoResult {
-  bool initialised = false;         //!< SLAM had a map and the Sim(3) alignment succeeded after the initialisation path
+  bool initialised = false;         //!< SLAM had a map and the Sim(3) alignment (tag mode: the metric frame) was there
+  bool tagMode = false;             //!< the scale and frame came from the tag (ServoSettings::tagSize)
+  vpHomogeneousMatrix tMcd;         //!< tag mode: the goal in the tag's frame
   bool converged = false;           //!< the convergence test of ServoSettings passed
   std::string failure;              //!< why not, when not
   unsigned int iterations = 0;      //!< servo iterations run (up to the first converged frame of the final streak)
   unsigned int frames = 0;          //!< frames rendered in all (initialisation + servo)
-  double alignmentScale = 0.;       //!< Sim(3) scale: metres per SLAM unit
-  double alignmentRmseMetres = 0.;  //!< residual of the Sim(3) alignment over the initialisation path, metres
-  unsigned int alignmentPoses = 0;  //!< poses used for the alignment
+  double alignmentScale = 0.;       //!< Sim(3) scale: metres per SLAM unit (tag mode: the metric frame's)
+  double alignmentRmseMetres = 0.;  //!< residual of the alignment over the initialisation path (tag mode: of the
+                                    //!< tag's sightings), metres
+  unsigned int alignmentPoses = 0;  //!< poses used for the alignment (tag mode: tag sightings kept)
   double slamSeconds = 0.;          //!< CPU time in vpHSlam::track(), seconds (wall clock)
   double renderSeconds = 0.;        //!< time spent rendering, seconds (wall clock)
   std::vector<ServoSample> samples; //!< one per frame

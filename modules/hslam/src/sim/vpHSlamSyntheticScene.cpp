@@ -238,6 +238,18 @@ vpHomogeneousMatrix vpHSlamSyntheticScene::addWallPicture(const vpImage<unsigned
   return wMp;
 }
 
+vpHomogeneousMatrix vpHSlamSyntheticScene::addWallTag(const vpImage<unsigned char> &tagImage, unsigned int blackCells,
+                                                      const vpColVector &centre, double tagSize)
+{
+  if (blackCells == 0 || blackCells > tagImage.getWidth()) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "vpHSlamSyntheticScene::addWallTag: the black square must span 1 to the image's width "
+                           "cells");
+  }
+  const vpHomogeneousMatrix wMp = addWallPicture(tagImage, centre, tagSize * tagImage.getWidth() / blackCells);
+  return wMp * vpHomogeneousMatrix(0., 0., 0., M_PI, 0., 0.);
+}
+
 void vpHSlamSyntheticScene::clearWallPictures()
 {
   m_pictures.clear();

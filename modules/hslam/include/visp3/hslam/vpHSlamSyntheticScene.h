@@ -184,6 +184,15 @@ public:
     wall, or the picture does not fit on it.
   */
   vpHomogeneousMatrix addWallPicture(const vpImage<unsigned char> &picture, const vpColVector &centre, double width);
+  /*!
+    Hang an AprilTag: addWallPicture() of \e tagImage (the tag as printed, one pixel per cell with its white margin)
+    scaled so that its black square, \e blackCells cells wide, is \e tagSize metres (vpDetectorAprilTag's size).
+    \return wMt, the tag's frame as vpDetectorAprilTag::getPose() gives it (origin at its centre, x right and y up as
+    printed, z out of the wall): the picture's frame turned half a turn about x.
+    \exception vpHSlamException::invalidArgument as addWallPicture(), and for blackCells 0 or over the image width.
+  */
+  vpHomogeneousMatrix addWallTag(const vpImage<unsigned char> &tagImage, unsigned int blackCells,
+                                 const vpColVector &centre, double tagSize);
   //! Take every picture added by addWallPicture() down.
   void clearWallPictures();
 
