@@ -11,17 +11,10 @@
   keyframes' SLAM poses wMc_i, every sighting i relates the two frames:
     camera centre   q_i = tMc_i.t = s R p_i + t      (p_i = wMc_i.t)
     orientation     tRc_i = R wRc_i
-  for the similarity mSw = (s, R, t) from the SLAM world to the metric one. The fit (fitMetricFrame()):
-  1. R: each sighting proposes R_i = tRc_i wRc_i^T; the proposal with most others within outlierRotationDeg seeds
-     the consensus, the agreeing ones are averaged (quaternion mean), the others refused (an ambiguous, flipped tag
-     pose is off by tens of degrees).
-  2. s, t with R held: linear least squares on the camera centres (closed form about their means), then sightings
-     that miss by more than max(3 robust sigma, outlierDistanceShare x their range to the tag) are refused and the
-     fit repeated (at most 3 times).
-  3. Trust: the scale's relative standard deviation sigma_r / sqrt(sum |q_i - q_mean|^2), sigma_r the residual per
-     coordinate (at least 0.3 % of the mean range, the detector's own precision on a 45-pixel tag, so a perfect fit on
-     three close views is not trusted), must be under maxScaleUncertainty with at least minSightings kept. A camera
-     that only rotates in front of the tag never becomes metric: the scale is not observable then.
+  for the similarity mSw = (s, R, t) from the SLAM world to the metric one, fitted robustly by fitMetricFrame()
+  (map/MetricFit.h) to every sighting of the segment, with the tag's depth in the map (the window's points inside
+  the tag against the tag plane's metric depth) as the scale's main evidence. A camera that only rotates in front of
+  the tag becomes metric through that depth alone.
   Without a tag id, the output keeps SLAM's world frame and only takes the scale: mSw = (s, I, 0).
 
   Only sightings of one map segment are fitted together (a new segment after a loss has its own scale): those of the
@@ -37,6 +30,7 @@
 
 #include "features/TagDetector.h"
 #include "map/MapFile.h"
+#include "map/MetricFit.h"
 #include "math/SE3.h"
 #include "math/Sim3.h"
 
@@ -53,37 +47,6 @@
 
 namespace hslam
 {
-//! One sighting as the fit takes it: the keyframe's SLAM pose and the tag's pose in its camera.
-struct TagView {
-  SE3d wMc;               //!< keyframe camera to SLAM world (map units)
-  SE3d cMt;               //!< tag to camera, metres
-  double depthScale = 0.; //!< metres per map unit from the map's points on the tag (0: none measured)
-  int depthPoints = 0;    //!< points that measured it
-};
-
-//! What the fit gave.
-struct MetricFit {
-  bool metric = false;           //!< trusted (see MetricFrame.h, step 3)
-  bool tagFrame = false;         //!< mSw puts the world in the tag's frame (an id was given)
-  Sim3d mSw;                     //!< SLAM world to the output world (metres)
-  double scale = 1.;             //!< metres per map unit (s)
-  double scaleUncertainty = 1.;  //!< relative standard deviation of s (1: unknown)
-  double rmsMetres = 0.;         //!< RMS camera-centre residual of the kept sightings, metres
-  double rotationSpreadDeg = 0.; //!< RMS angle of the kept sightings' rotations to the consensus, degrees
-  double depthScale = 0.;        //!< the scale the map's points on the tag gave (0: none)
-  unsigned int segment = 0;      //!< map segment fitted (MetricFrame::refit: the newest with a sighting)
-  unsigned int sightings = 0;    //!< sightings fitted (one segment, one tag)
-  unsigned int kept = 0;         //!< of which kept (the others refused as outliers)
-  std::vector<bool> inlier;      //!< per view given to fitMetricFrame()
-};
-
-/*!
-  The robust fit of MetricFrame.h on \e views (one tag, one segment). With \e tagFrame false only the scale is
-  applied (mSw = (s, I, 0)). Fewer than two views, or all refused: metric false, scale 1.
-*/
-VISP_EXPORT MetricFit fitMetricFrame(const std::vector<TagView> &views, bool tagFrame,
-                                     const vpHSlamParameters::TagFrame &options);
-
 /*!
   The output frame of a fit: wMc (SLAM world, map units) as the camera pose in the output world, metres when the fit
   is metric; identity when it is not (poses stay in the SLAM frame until the fit is trusted).
