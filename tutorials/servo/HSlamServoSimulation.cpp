@@ -218,6 +218,25 @@ bool alignSlamToTag(const vpHSlam &slam, const vpHomogeneousMatrix &wMt, const S
   return true;
 }
 
+/*!
+  The goal in the simulator's world (wMcd): c0Mcd from the start pose \e wMc0; in tag mode the tag is hung first
+  (\e wMt) and the goal may be given in its frame, which result.tMcd then records.
+*/
+vpHomogeneousMatrix placeGoal(vpHSlamSyntheticScene &scene, const ServoSettings &settings,
+                              const vpHomogeneousMatrix &wMc0, vpHomogeneousMatrix &wMt, ServoResult &result)
+{
+  vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
+  result.tagMode = settings.tagSize > 0.;
+  if (result.tagMode) {
+    wMt = hangTagInView(scene, settings);
+    if (settings.goalInTagFrame) {
+      wMcd = wMt * settings.tMcd;
+    }
+    result.tMcd = wMt.inverse() * wMcd;
+  }
+  return wMcd;
+}
+
 //! The free-flying camera at \e wMc0. Its own velocity saturation (per component, with a message on stdout) is set
 //! above every velocity sent: the initialisation path's peak and boundTwist() (on the norms) bound them here.
 void configureRobot(vpSimulatorCamera &robot, double dt, double maxSpeed, double maxRate,
@@ -343,17 +362,8 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
 
   const double dt = 1. / settings.fps;
   const vpHomogeneousMatrix wMc0 = scene.getPose(0);
-  vpHomogeneousMatrix wMcd = wMc0 * settings.c0Mcd;
   vpHomogeneousMatrix wMt; // tag mode: the tag's pose in the simulator's world
-  result.tagMode = settings.tagSize > 0.;
-  if (result.tagMode) {
-    wMt = hangTagInView(scene, settings);
-    if (settings.goalInTagFrame) {
-      wMcd = wMt * settings.tMcd;
-    }
-    result.tMcd = wMt.inverse() * wMcd;
-  }
-  const vpHomogeneousMatrix cdMw = wMcd.inverse();
+  const vpHomogeneousMatrix cdMw = placeGoal(scene, settings, wMc0, wMt, result).inverse();
 
   const double maxSpeed = settings.maxStepMetres / dt, maxRate = vpMath::rad(settings.maxStepDegrees) / dt;
   vpSimulatorCamera robot;
