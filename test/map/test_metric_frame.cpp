@@ -127,7 +127,7 @@ TEST(MetricFrame, WithoutAnIdOnlyTheScaleIsApplied)
   EXPECT_LT(fit.mSw.unitQuaternion().angularDistance(Eigen::Quaterniond::Identity()), 1e-12);
 }
 
-TEST(MetricFrame, RefitReadsTheKeyframesCurrentPosesOfTheNewestSegment)
+TEST(MetricFrame, RefitReadsTheKeyframesCurrentPosesOfTheCurrentSegment)
 {
   vpHSlamParameters::TagFrame options;
   MetricFrame frame(vpHSlamTag("tag36h11", 0.16, 0), options);
@@ -157,16 +157,74 @@ TEST(MetricFrame, RefitReadsTheKeyframesCurrentPosesOfTheNewestSegment)
     return true;
   });
   EXPECT_NEAR(frame.current().scale / (0.5 * trueSimilarity().scale()), 1., 0.01);
-  // A new segment with no sighting yet: whatever the old one had, it is not metric; one with sightings is.
-  TagSighting s;
-  s.id = 0;
-  s.cMt = views[0].cMt;
-  frame.addSightings(100, 1, {s});
+  // A loop correction divides the map around the keyframes by 2 again: their depth measurements (none here) and the
+  // fit follow; rescaling keyframes that saw nothing changes nothing.
+  frame.rescaleKeyframes({1000}, {2.});
+  EXPECT_TRUE(frame.current().metric);
+  // Tracking is lost: the new segment has its own scale, so the old fit no longer applies, even at the next refit
+  // (its sightings belong to the old segment); one sighting in the new segment is not enough.
+  frame.startSegment(1);
+  EXPECT_FALSE(frame.current().metric);
   frame.refit([&](int id, SE3d &wMc) {
-    wMc = id == 100 ? poses[0] : poses[static_cast<size_t>(id)];
+    wMc = poses[static_cast<size_t>(id)];
     return true;
   });
   EXPECT_FALSE(frame.current().metric);
+  EXPECT_FALSE(appliesTo(frame.current(), 0));
   frame.clear();
   EXPECT_EQ(frame.sightingCount(), 0u);
+}
+
+TEST(MetricFrame, TheTagsDepthInTheMapFixesTheScaleAndFollowsALoopCorrection)
+{
+  // The camera hardly moves (2 mm): only the map's points on the tag can tell the scale. Their depth against the tag
+  // plane's metric depth is measured at refit; a loop correction that divides the map by 2 must carry it along.
+  vpHSlamParameters::TagFrame options;
+  vpCameraParameters K;
+  K.initPersProjWithoutDistortion(500., 500., 320., 240.);
+  MetricFrame frame;
+  frame.setTag(vpHSlamTag("tag36h11", 0.16, 0), options, K);
+  const std::vector<TagView> views = makeViews(8, 0.002, 0., 10);
+  const Sim3d wSm = trueSimilarity().inverse();
+  std::vector<SE3d> poses;
+  for (size_t i = 0; i < views.size(); ++i) {
+    TagSighting s;
+    s.id = 0;
+    s.cMt = views[i].cMt;
+    for (int k = 0; k < 4; ++k) { // the tag's corners, 8 cm from its centre
+      const Eigen::Vector3d X = s.cMt * Eigen::Vector3d(k == 1 || k == 2 ? 0.08 : -0.08, k >= 2 ? 0.08 : -0.08, 0.);
+      s.corners[static_cast<size_t>(k)] = Eigen::Vector2d(320. + 500. * X.x() / X.z(), 240. + 500. * X.y() / X.z());
+    }
+    frame.addSightings(static_cast<int>(i), 0, {s});
+    poses.push_back(views[i].wMc);
+  }
+  std::vector<Eigen::Vector3d> points; // on the tag, in the map
+  for (int u = -2; u <= 2; ++u) {
+    for (int v = -2; v <= 2; ++v) {
+      points.push_back(wSm * Eigen::Vector3d(0.025 * u, 0.025 * v, 0.));
+    }
+  }
+  double mapScale = 1.; // the map's distances are divided by this
+  const auto pose = [&](int id, SE3d &wMc) {
+    wMc = poses[static_cast<size_t>(id)];
+    wMc.translation() /= mapScale;
+    return true;
+  };
+  frame.refit(pose); // no points yet: the positions alone do not tell the scale
+  EXPECT_FALSE(frame.current().metric);
+  frame.refit(pose, [&](std::vector<Eigen::Vector3d> &out) { out = points; });
+  ASSERT_TRUE(frame.current().metric) << frame.current().scaleUncertainty;
+  EXPECT_NEAR(frame.current().depthScale / trueSimilarity().scale(), 1., 0.003); // the poses carry 0.3 % noise
+  EXPECT_NEAR(frame.current().scale / trueSimilarity().scale(), 1., 0.003);
+  // The map divided by 2 around every keyframe (no point in view any more): with the stored depths rescaled, the
+  // scale is twice the metres per unit.
+  mapScale = 2.;
+  std::vector<int> ids;
+  for (size_t i = 0; i < views.size(); ++i) {
+    ids.push_back(static_cast<int>(i));
+  }
+  frame.rescaleKeyframes(ids, std::vector<double>(ids.size(), 2.));
+  frame.refit(pose);
+  ASSERT_TRUE(frame.current().metric);
+  EXPECT_NEAR(frame.current().scale / (2. * trueSimilarity().scale()), 1., 0.003);
 }

@@ -410,7 +410,8 @@ ServoResult runServo(const ServoSettings &settings, const std::function<void(con
     vpColVector v(6, 0.);
     if (!sample.servoing) {
       v = initialisationVelocity(k, settings.initFrames, settings.initRadiusMetres, dt);
-    } else if (sample.state == vpHSlam::stateTracking) {
+    } else if (sample.state == vpHSlam::stateTracking && (!result.tagMode || slam.isMetric())) {
+      // (tag mode: a pose of a new map segment, after a loss, is not in metres until the tag is seen again)
       untracked = 0;
       v = servoVelocity(slam, sim3, cdMw, wMc, task, t, tu, maxSpeed, maxRate, sample);
       ++result.iterations;

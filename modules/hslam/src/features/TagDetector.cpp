@@ -2,16 +2,26 @@
 
 #include "math/ViSPConversions.h"
 
-#include <visp3/detection/vpDetectorAprilTag.h>
 #include <visp3/hslam/vpHSlamException.h>
+#ifdef VISP_HAVE_APRILTAG
+#include <visp3/detection/vpDetectorAprilTag.h>
+#endif
 
 #include <algorithm>
 #include <cmath>
+
+#ifndef VISP_HAVE_APRILTAG
+// ViSP built without its AprilTag detector: a tag cannot be used (vpHSlam::setTag() throws), the rest works.
+class vpDetectorAprilTag
+{
+};
+#endif
 
 namespace hslam
 {
 namespace
 {
+#ifdef VISP_HAVE_APRILTAG
 vpDetectorAprilTag::vpAprilTagFamily familyOf(const std::string &name)
 {
   if (name == "tag36h11") {
@@ -28,6 +38,7 @@ vpDetectorAprilTag::vpAprilTagFamily familyOf(const std::string &name)
   }
   throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: unknown family '" + name + "'");
 }
+#endif
 } // namespace
 
 TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m_tag(tag), m_K(K)
@@ -35,10 +46,15 @@ TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m
   if (!tag.isSet()) {
     throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: no tag described");
   }
+#ifndef VISP_HAVE_APRILTAG
+  throw vpHSlamException(vpHSlamException::unsupported,
+                         "tag detector: this ViSP was built without its AprilTag detector (VISP_HAVE_APRILTAG)");
+#else
   m_detector.reset(new vpDetectorAprilTag(familyOf(tag.getFamily()), vpDetectorAprilTag::HOMOGRAPHY_VIRTUAL_VS));
   m_detector->setAprilTagNbThreads(1);
   // Full resolution for the quads: keyframes only, and corner accuracy is what sets the scale.
   m_detector->setAprilTagQuadDecimate(1.f);
+#endif
 }
 
 TagDetector::~TagDetector() = default;
@@ -47,6 +63,10 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
 {
   std::vector<TagSighting> out;
   m_lastRaw = 0;
+#ifndef VISP_HAVE_APRILTAG
+  (void)I;
+  return out;
+#else
   if (I.getSize() == 0 || !m_detector->detect(I)) {
     return out;
   }
@@ -107,5 +127,6 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
     out.push_back(s);
   }
   return out;
+#endif
 }
 } // namespace hslam

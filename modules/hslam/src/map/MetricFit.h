@@ -51,7 +51,8 @@ struct MetricFit {
   double rmsMetres = 0.;         //!< RMS camera-centre residual of the kept sightings, metres
   double rotationSpreadDeg = 0.; //!< RMS angle of the kept sightings' rotations to the consensus, degrees
   double depthScale = 0.;        //!< the scale the map's points on the tag gave (0: none)
-  unsigned int segment = 0;      //!< map segment fitted (MetricFrame::refit: the newest with a sighting)
+  unsigned int segment = 0;      //!< map segment fitted (MetricFrame::refit: the current one)
+  bool allSegments = false;      //!< applies to every segment (a loaded map's frame, localisation-only)
   unsigned int sightings = 0;    //!< sightings fitted (one segment, one tag)
   unsigned int kept = 0;         //!< of which kept (the others refused as outliers)
   std::vector<bool> inlier;      //!< per view given to fitMetricFrame()

@@ -18,6 +18,11 @@ SE3d outputPose(const MetricFit &fit, const SE3d &wMc)
   return SE3d(fit.mSw.unitQuaternion() * wMc.unitQuaternion(), fit.mSw * wMc.translation());
 }
 
+bool appliesTo(const MetricFit &fit, unsigned int segment)
+{
+  return fit.metric && (fit.allSegments || fit.segment == segment);
+}
+
 Eigen::Vector3d outputPoint(const MetricFit &fit, const Eigen::Vector3d &pw)
 {
   return fit.metric ? Eigen::Vector3d(fit.mSw * pw) : pw;
@@ -42,6 +47,7 @@ MetricFit fromMapMetricFrame(const MapMetricFrame &frame)
   MetricFit fit;
   if (frame.present) {
     fit.metric = true;
+    fit.allSegments = true; // localisation-only locates frames against any of the loaded keyframes
     fit.tagFrame = frame.tagFrame;
     fit.segment = static_cast<unsigned int>(frame.segment);
     fit.mSw = Sim3d(frame.oMw.unitQuaternion(), frame.oMw.translation(), frame.scale);
@@ -68,6 +74,7 @@ void MetricFrame::setTag(const vpHSlamTag &tag, const vpHSlamParameters::TagFram
   m_fit = MetricFit();
   m_detectionMsTotal = 0.;
   m_detections = 0;
+  ++m_generation;
 }
 
 vpHSlamTag MetricFrame::tag() const
@@ -95,6 +102,7 @@ void MetricFrame::observeKeyframe(int keyframeId, unsigned int segment, const vp
     const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     addSightings(keyframeId, segment, sightings);
     std::lock_guard<std::mutex> lock(m_mutex);
+    m_segment = segment;
     m_detectionMsTotal += ms;
     ++m_detections;
   }
@@ -107,7 +115,8 @@ double MetricFrame::detectionMsMean() const
   return m_detections > 0 ? m_detectionMsTotal / m_detections : 0.;
 }
 
-vpHSlamTrajectory MetricFrame::toOutput(const vpHSlamTrajectory &trajectory) const
+vpHSlamTrajectory MetricFrame::toOutput(const vpHSlamTrajectory &trajectory,
+                                        const std::vector<unsigned int> &segments) const
 {
   const MetricFit fit = current();
   if (!fit.metric) {
@@ -115,9 +124,31 @@ vpHSlamTrajectory MetricFrame::toOutput(const vpHSlamTrajectory &trajectory) con
   }
   vpHSlamTrajectory out;
   for (size_t i = 0; i < trajectory.size(); ++i) {
-    out.add(trajectory.getTimestamp(i), toVpHomogeneousMatrix(outputPose(fit, toSE3(trajectory.get_wMc(i)))));
+    const bool convert = i < segments.size() && appliesTo(fit, segments[i]);
+    out.add(trajectory.getTimestamp(i),
+            convert ? toVpHomogeneousMatrix(outputPose(fit, toSE3(trajectory.get_wMc(i)))) : trajectory.get_wMc(i));
   }
   return out;
+}
+
+void MetricFrame::startSegment(unsigned int segment)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  m_segment = segment;
+  m_fit = MetricFit(); // also when a discarded segment's number is used again
+  m_fit.segment = segment;
+}
+
+void MetricFrame::rescaleKeyframes(const std::vector<int> &ids, const std::vector<double> &scales)
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  for (Stored &s : m_sightings) {
+    for (size_t k = 0; k < ids.size() && k < scales.size(); ++k) {
+      if (s.keyframeId == ids[k] && scales[k] > 0.) {
+        s.depthScale *= scales[k]; // map units divided by the scale: a unit is that many times more metres
+      }
+    }
+  }
 }
 
 void MetricFrame::addSightings(int keyframeId, unsigned int segment, const std::vector<TagSighting> &sightings)
@@ -128,14 +159,14 @@ void MetricFrame::addSightings(int keyframeId, unsigned int segment, const std::
   }
 }
 
-bool MetricFrame::measureDepthScale(const Stored &sighting, const SE3d &wMc, const std::vector<Eigen::Vector3d> &points,
-                                    double &scale, int &count) const
+bool MetricFrame::measureDepthScale(const Stored &sighting, const SE3d &wMc, const vpCameraParameters &K,
+                                    const std::vector<Eigen::Vector3d> &points, double &scale, int &count)
 {
   const SE3d cMw = wMc.inverse();
   // The tag plane in the camera: normal n through the tag's centre c (metres).
   const Eigen::Vector3d n = sighting.cMt.rotationMatrix().col(2), c = sighting.cMt.translation();
   const double nc = n.dot(c);
-  const double px = m_K.get_px(), py = m_K.get_py(), u0 = m_K.get_u0(), v0 = m_K.get_v0();
+  const double px = K.get_px(), py = K.get_py(), u0 = K.get_u0(), v0 = K.get_v0();
   std::vector<double> ratios;
   for (const Eigen::Vector3d &pw : points) {
     const Eigen::Vector3d pc = cMw * pw;
@@ -177,19 +208,21 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
   std::vector<Stored> sightings;
   bool tagFrame = false;
   vpHSlamParameters::TagFrame options;
+  vpCameraParameters K;
+  unsigned int segment = 0, generation = 0;
   {
     std::lock_guard<std::mutex> lock(m_mutex);
     sightings = m_sightings;
     tagFrame = m_tag.hasId();
     options = m_options;
+    K = m_K;
+    segment = m_segment;
+    generation = m_generation;
   }
-  // The newest segment with a sighting; in it, one fit per tag id, the best trusted.
+  // The current segment's sightings: one fit per tag id, the best trusted.
   MetricFit best;
+  best.segment = segment;
   if (!sightings.empty()) {
-    unsigned int segment = 0;
-    for (const Stored &s : sightings) {
-      segment = std::max(segment, s.segment);
-    }
     std::vector<Eigen::Vector3d> points;
     if (windowPoints) {
       windowPoints(points);
@@ -204,7 +237,7 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
       }
       double scale = 0.;
       int count = 0;
-      if (!points.empty() && measureDepthScale(s, wMc, points, scale, count)) {
+      if (!points.empty() && measureDepthScale(s, wMc, K, points, scale, count)) {
         s.depthScale = scale;
         s.depthPoints = count;
         measured.push_back({i, {scale, count}});
@@ -215,7 +248,6 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
       byTag[s.tagId].push_back(view);
     }
     bool first = true;
-    best.segment = segment;
     for (const auto &entry : byTag) {
       const MetricFit fit = fitMetricFrame(entry.second, tagFrame, options);
       if (first || (fit.metric && !best.metric) ||
@@ -226,15 +258,21 @@ void MetricFrame::refit(const PoseLookup &keyframePose, const PointLookup &windo
       }
     }
     std::lock_guard<std::mutex> lock(m_mutex);
+    if (generation != m_generation) {
+      return; // setTag() or clear() came meanwhile: this fit is of sightings that are gone
+    }
     for (const auto &m : measured) {
-      if (m.first < m_sightings.size()) { // the sightings are only appended to (or cleared) meanwhile
+      // The back end is the only writer of sightings (appended, never reordered), so the index still names it.
+      if (m.first < m_sightings.size()) {
         m_sightings[m.first].depthScale = m.second.first;
         m_sightings[m.first].depthPoints = m.second.second;
       }
     }
   }
   std::lock_guard<std::mutex> lock(m_mutex);
-  m_fit = best;
+  if (generation == m_generation) {
+    m_fit = best;
+  }
 }
 
 MetricFit MetricFrame::current() const
@@ -261,5 +299,9 @@ void MetricFrame::clear()
   m_sightings.clear();
   m_fit = MetricFit();
   m_loaded = MetricFit();
+  m_segment = 0;
+  m_detectionMsTotal = 0.;
+  m_detections = 0;
+  ++m_generation;
 }
 } // namespace hslam

@@ -17,9 +17,11 @@
   the tag becomes metric through that depth alone.
   Without a tag id, the output keeps SLAM's world frame and only takes the scale: mSw = (s, I, 0).
 
-  Only sightings of one map segment are fitted together (a new segment after a loss has its own scale): those of the
-  newest segment that has any; the frame is not metric in a segment where the tag was never seen. Each refit reads
-  the keyframes' current poses, so window optimisation and loop corrections flow into the frame.
+  Only sightings of the current map segment are fitted (a new segment after a loss has its own scale): startSegment()
+  forgets the fit, and the frame is not metric in a segment where the tag was never seen; outputs of other segments
+  are left in their own units (appliesTo()). Each refit reads the keyframes' current poses, so window optimisation
+  and loop corrections flow into the frame; a loop correction that rescales keyframes rescales their sightings'
+  depth measurements too (rescaleKeyframes()).
 
   Threading: observeKeyframe(), addSightings(), refit() and clear() from the back end, setTag() from the caller's
   thread (the detector has its own mutex); current() and the output conversions from any thread (a mutex guards the
@@ -52,6 +54,8 @@ namespace hslam
   is metric; identity when it is not (poses stay in the SLAM frame until the fit is trusted).
 */
 VISP_EXPORT SE3d outputPose(const MetricFit &fit, const SE3d &wMc);
+//! Whether \e fit converts the outputs of map segment \e segment (metric, and fitted in it or loaded for all).
+VISP_EXPORT bool appliesTo(const MetricFit &fit, unsigned int segment);
 //! The same for a point.
 VISP_EXPORT Eigen::Vector3d outputPoint(const MetricFit &fit, const Eigen::Vector3d &pw);
 
@@ -88,8 +92,18 @@ public:
                        const PoseLookup &keyframePose, const PointLookup &windowPoints = nullptr);
   //! Mean tag detection time per keyframe so far, milliseconds.
   double detectionMsMean() const;
-  //! \e trajectory (SLAM frame) in the output frame of the current fit.
-  vpHSlamTrajectory toOutput(const vpHSlamTrajectory &trajectory) const;
+  /*!
+    \e trajectory (SLAM frame) in the output frame of the current fit: the poses whose segment (\e segments, same
+    order) the fit applies to; the others as they are.
+  */
+  vpHSlamTrajectory toOutput(const vpHSlamTrajectory &trajectory, const std::vector<unsigned int> &segments) const;
+  //! A new map segment starts (after a loss): the fit of the previous one no longer applies.
+  void startSegment(unsigned int segment);
+  /*!
+    A loop correction divided the map around keyframes \e ids by \e scales (LocalMapper::KeyframeState::scale: new
+    distances = old / scale): their sightings' depth measurements (metres per map unit) are multiplied by it.
+  */
+  void rescaleKeyframes(const std::vector<int> &ids, const std::vector<double> &scales);
 
   //! Sightings of keyframe \e keyframeId (segment \e segment), as the detector handed them on.
   void addSightings(int keyframeId, unsigned int segment, const std::vector<TagSighting> &sightings);
@@ -125,15 +139,17 @@ private:
     int depthPoints;
   };
   //! The depth measurement of refit() for one sighting; false with too few points.
-  bool measureDepthScale(const Stored &sighting, const SE3d &wMc, const std::vector<Eigen::Vector3d> &points,
-                         double &scale, int &count) const;
+  static bool measureDepthScale(const Stored &sighting, const SE3d &wMc, const vpCameraParameters &K,
+                                const std::vector<Eigen::Vector3d> &points, double &scale, int &count);
   vpHSlamTag m_tag;
   vpHSlamParameters::TagFrame m_options;
   std::vector<Stored> m_sightings;
   mutable std::mutex m_mutex; //!< guards the tag, the sightings, the fit and the timing
   MetricFit m_fit;
-  MetricFit m_loaded;         //!< setLoaded()
-  std::mutex m_detectorMutex; //!< held while the detector runs or is replaced
+  MetricFit m_loaded;            //!< setLoaded()
+  unsigned int m_segment = 0;    //!< the current map segment (startSegment(), observeKeyframe())
+  unsigned int m_generation = 0; //!< bumped by setTag() and clear(): a refit begun before drops its result
+  std::mutex m_detectorMutex;    //!< held while the detector runs or is replaced
   std::unique_ptr<TagDetector> m_detector;
   vpCameraParameters m_K; //!< of the keyframe images (pinhole)
   double m_detectionMsTotal = 0.;

@@ -338,6 +338,7 @@ void SlamSystem::declareLost(bool discardSegment)
   if (!discardSegment) {
     ++m_segment; // a discarded segment's number is used again
   }
+  m_metricFrame.startSegment(m_segment); // the new segment has its own scale: not metric until the tag is seen in it
 }
 
 void SlamSystem::dropPreparedReferenceAndSnapshot()

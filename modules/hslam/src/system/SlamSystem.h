@@ -86,10 +86,17 @@ public:
   std::vector<vpImagePoint> descriptorMatches() const { return m_frameTracker->descriptorMatches(); }
   std::vector<vpHSlam::MapPoint> mapPoints() const;
   std::vector<vpHSlam::GraphEdge> graphEdges() const;
-  vpHSlamTrajectory trajectory(int segment) const { return m_metricFrame.toOutput(m_recorder.trajectory(segment)); }
+  vpHSlamTrajectory trajectory(int segment) const
+  {
+    std::vector<unsigned int> segments;
+    const vpHSlamTrajectory t = m_recorder.trajectory(segment, &segments);
+    return m_metricFrame.toOutput(t, segments);
+  }
   vpHSlamTrajectory keyframeTrajectory(int segment) const
   {
-    return m_metricFrame.toOutput(m_recorder.keyframeTrajectory(segment));
+    std::vector<unsigned int> segments;
+    const vpHSlamTrajectory t = m_recorder.keyframeTrajectory(segment, &segments);
+    return m_metricFrame.toOutput(t, segments);
   }
   std::vector<unsigned int> trajectorySegments() const { return m_recorder.frameSegments(); }
   vpHSlam::Statistics statistics() const;

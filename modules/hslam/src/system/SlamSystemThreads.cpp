@@ -174,6 +174,7 @@ void SlamSystem::publishAfterKeyframe()
   }
   if (!correctedIds.empty()) {
     m_recorder.correctKeyframes(correctedIds, correctedPoses, correctedScales);
+    m_metricFrame.rescaleKeyframes(correctedIds, correctedScales); // the tag's depths measured in those keyframes
   }
   {
     std::lock_guard<std::mutex> lock(m_referenceMutex);
@@ -288,7 +289,8 @@ std::vector<vpHSlam::Keyframe> SlamSystem::keyframes() const
     k.id = static_cast<unsigned int>(records[i].id);
     k.frameIndex = static_cast<unsigned int>(records[i].frameIndex);
     k.timestamp = records[i].timestamp;
-    k.wMc = toVpHomogeneousMatrix(outputPose(fit, records[i].wMc));
+    k.wMc =
+        toVpHomogeneousMatrix(appliesTo(fit, records[i].segment) ? outputPose(fit, records[i].wMc) : records[i].wMc);
     k.inWindow = records[i].inWindow;
     k.segment = records[i].segment;
     k.activePoints = records[i].activePoints;

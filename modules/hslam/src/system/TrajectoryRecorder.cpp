@@ -211,10 +211,13 @@ std::vector<TrajectoryRecorder::KeyframeRecord> TrajectoryRecorder::keyframes() 
   return m_keyframes;
 }
 
-vpHSlamTrajectory TrajectoryRecorder::trajectory(int segment) const
+vpHSlamTrajectory TrajectoryRecorder::trajectory(int segment, std::vector<unsigned int> *segments) const
 {
   std::lock_guard<std::mutex> lock(m_mutex);
   vpHSlamTrajectory traj;
+  if (segments) {
+    segments->clear();
+  }
   for (int slot : m_frameSlot) { // frame index order, whatever the order of recording
     if (slot < 0) {
       continue;
@@ -222,18 +225,27 @@ vpHSlamTrajectory TrajectoryRecorder::trajectory(int segment) const
     const FrameRecord &f = m_frames[static_cast<size_t>(slot)];
     if (segment < 0 || f.segment == static_cast<unsigned int>(segment)) {
       traj.add(f.timestamp, toVpHomogeneousMatrix(worldPoseLocked(f)));
+      if (segments) {
+        segments->push_back(f.segment);
+      }
     }
   }
   return traj;
 }
 
-vpHSlamTrajectory TrajectoryRecorder::keyframeTrajectory(int segment) const
+vpHSlamTrajectory TrajectoryRecorder::keyframeTrajectory(int segment, std::vector<unsigned int> *segments) const
 {
   std::lock_guard<std::mutex> lock(m_mutex);
   vpHSlamTrajectory traj;
+  if (segments) {
+    segments->clear();
+  }
   for (const KeyframeRecord &k : m_keyframes) {
     if (!k.discarded && (segment < 0 || k.segment == static_cast<unsigned int>(segment))) {
       traj.add(k.timestamp, toVpHomogeneousMatrix(k.wMc));
+      if (segments) {
+        segments->push_back(k.segment);
+      }
     }
   }
   return traj;

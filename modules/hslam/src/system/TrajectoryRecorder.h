@@ -97,9 +97,11 @@ public:
   //! Every keyframe record, discarded ones included (in id order).
   std::vector<KeyframeRecord> keyframes() const;
 
-  //! Every frame (\e segment < 0) or one segment's frames, as camera-to-world poses, in frame index order.
-  vpHSlamTrajectory trajectory(int segment = -1) const;
-  vpHSlamTrajectory keyframeTrajectory(int segment = -1) const;
+  //! Every frame (\e segment < 0) or one segment's frames, as camera-to-world poses, in frame index order; with
+  //! \e segments, each pose's segment (same order, read under the same lock).
+  vpHSlamTrajectory trajectory(int segment = -1, std::vector<unsigned int> *segments = nullptr) const;
+  //! The same for the keyframes (id order, discarded ones left out).
+  vpHSlamTrajectory keyframeTrajectory(int segment = -1, std::vector<unsigned int> *segments = nullptr) const;
   std::vector<unsigned int> frameSegments() const;
 
   void clear();
