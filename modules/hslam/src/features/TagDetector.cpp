@@ -1,5 +1,6 @@
 #include "features/TagDetector.h"
 
+#include "features/ImagePyramid.h"
 #include "math/ViSPConversions.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -101,14 +102,15 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
     // coordinates; recompute the RMS in pixels from the pose to have a unit a threshold can be written in.
     const double half = 0.5 * m_tag.getSize();
     const double tagCorners[4][2] = {{-half, half}, {half, half}, {half, -half}, {-half, -half}};
+    const SE3d pose = toSE3(cMt);
+    const PinholeIntrinsics pinhole{m_K.get_px(), m_K.get_py(), m_K.get_u0(), m_K.get_v0()};
     double sq = 0.;
     bool front = true;
     std::array<Eigen::Vector2d, 4> projected;
     for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d X = toSE3(cMt) * Eigen::Vector3d(tagCorners[k][0], tagCorners[k][1], 0.);
+      const Eigen::Vector3d X = pose * Eigen::Vector3d(tagCorners[k][0], tagCorners[k][1], 0.);
       front = front && X.z() > 0.;
-      projected[k] =
-          Eigen::Vector2d(m_K.get_u0() + m_K.get_px() * X.x() / X.z(), m_K.get_v0() + m_K.get_py() * X.y() / X.z());
+      projected[k] = pinhole.project(X);
     }
     // The detector's corner order is fixed relative to the tag; match each projected corner to the nearest
     // detected one so the check does not depend on it.
@@ -123,7 +125,7 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
     if (!front || !(s.projectionErrorPx <= kMaxProjectionErrorPx)) {
       continue;
     }
-    s.cMt = toSE3(cMt);
+    s.cMt = pose;
     out.push_back(s);
   }
   return out;

@@ -1,5 +1,7 @@
 #include "map/MetricFit.h"
 
+#include "math/SO3.h"
+
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <algorithm>
@@ -23,13 +25,6 @@ constexpr double kRotationSigmaRad = 1.5 * M_PI / 180.;
 // inverse-depth noise, averaged).
 constexpr double kDepthScaleFloor = 0.003;
 constexpr double kRadToDeg = 180. / M_PI;
-
-Eigen::Matrix3d skew(const Eigen::Vector3d &v)
-{
-  Eigen::Matrix3d S;
-  S << 0., -v.z(), v.y(), v.z(), 0., -v.x(), -v.y(), v.x(), 0.;
-  return S;
-}
 
 //! Rotation consensus (step 1): marks inliers, returns their mean rotation.
 Eigen::Quaterniond rotationConsensus(const std::vector<Eigen::Quaterniond> &proposals, double thresholdRad,
@@ -207,7 +202,7 @@ void linearize(const Evidence &e, const std::vector<bool> &inlier, Refinement &r
     const Eigen::Vector3d sRp = r.s * (R * e.p[i]);
     const Eigen::Vector3d res = (sRp + r.t - e.q[i]) / sigma;
     Eigen::Matrix<double, 3, 7> J;
-    J.block<3, 3>(0, 0) = -skew(sRp) / sigma;
+    J.block<3, 3>(0, 0) = -so3Hat(sRp) / sigma;
     J.block<3, 3>(0, 3) = Eigen::Matrix3d::Identity() / sigma;
     J.col(6) = sRp / sigma;
     r.H += J.transpose() * J;

@@ -1,5 +1,6 @@
 #include "map/MetricFrame.h"
 
+#include "features/ImagePyramid.h"
 #include "math/ViSPConversions.h"
 
 #include <algorithm>
@@ -83,12 +84,6 @@ vpHSlamTag MetricFrame::tag() const
   return m_tag;
 }
 
-bool MetricFrame::enabled() const
-{
-  std::lock_guard<std::mutex> lock(m_mutex);
-  return m_tag.isSet();
-}
-
 void MetricFrame::observeKeyframe(int keyframeId, unsigned int segment, const vpImage<unsigned char> &image,
                                   const PoseLookup &keyframePose, const PointLookup &windowPoints)
 {
@@ -166,14 +161,14 @@ bool MetricFrame::measureDepthScale(const Stored &sighting, const SE3d &wMc, con
   // The tag plane in the camera: normal n through the tag's centre c (metres).
   const Eigen::Vector3d n = sighting.cMt.rotationMatrix().col(2), c = sighting.cMt.translation();
   const double nc = n.dot(c);
-  const double px = K.get_px(), py = K.get_py(), u0 = K.get_u0(), v0 = K.get_v0();
+  const PinholeIntrinsics pinhole{K.get_px(), K.get_py(), K.get_u0(), K.get_v0()};
   std::vector<double> ratios;
   for (const Eigen::Vector3d &pw : points) {
     const Eigen::Vector3d pc = cMw * pw;
     if (pc.z() <= 0.) {
       continue;
     }
-    const Eigen::Vector2d uv(u0 + px * pc.x() / pc.z(), v0 + py * pc.y() / pc.z());
+    const Eigen::Vector2d uv = pinhole.project(pc);
     // Inside the (convex) quad: the same side of its four edges.
     int positive = 0, negative = 0;
     for (int k = 0; k < 4; ++k) {
@@ -185,7 +180,7 @@ bool MetricFrame::measureDepthScale(const Stored &sighting, const SE3d &wMc, con
     if (positive != 4 && negative != 4) {
       continue;
     }
-    const Eigen::Vector3d ray((uv.x() - u0) / px, (uv.y() - v0) / py, 1.);
+    const Eigen::Vector3d ray = pinhole.unproject(uv.x(), uv.y(), 1.); // z = 1: the depth along it is nc / nr
     const double nr = n.dot(ray);
     if (std::fabs(nr) < 1e-6) {
       continue;

@@ -82,7 +82,6 @@ public:
     observeKeyframe() will get (the detector is made for it).
   */
   void setTag(const vpHSlamTag &tag, const vpHSlamParameters::TagFrame &options, const vpCameraParameters &K);
-  bool enabled() const; //!< a tag is described
 
   /*!
     A new keyframe: the tag is searched for in \e image (rectified, photometrically raw), its sightings stored, and the

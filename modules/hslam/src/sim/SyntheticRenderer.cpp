@@ -238,13 +238,14 @@ void SyntheticRenderer::setPictures(const std::vector<SimPicture> &pictures)
   m_pictures = std::move(made);
 }
 
-const SyntheticRenderer::Picture *SyntheticRenderer::pictureAt(int face, const double p[3]) const
+const SyntheticRenderer::Picture *SyntheticRenderer::pictureAt(int face, const double p[3], double &a, double &b) const
 {
   for (const Picture &P : m_pictures) {
     if (P.face != face) {
       continue;
     }
-    double a = 0., b = 0.;
+    a = 0.;
+    b = 0.;
     for (int k = 0; k < 3; ++k) {
       a += (p[k] - P.centre[k]) * P.xAxis[k];
       b += (p[k] - P.centre[k]) * P.yAxis[k];
@@ -368,12 +369,8 @@ float SyntheticRenderer::shade(const double o[3], const double d[3], double pixe
   // the geometric mean of both directions picks an isotropic mip level.
   const double footprint = t * norm * pixelAngle / std::sqrt(cosine);
   if (faceIndex < 6 && !m_pictures.empty()) {
-    if (const Picture *picture = pictureAt(faceIndex, p)) {
-      double a = 0., b = 0.;
-      for (int k = 0; k < 3; ++k) {
-        a += (p[k] - picture->centre[k]) * picture->xAxis[k];
-        b += (p[k] - picture->centre[k]) * picture->yAxis[k];
-      }
+    double a = 0., b = 0.;
+    if (const Picture *picture = pictureAt(faceIndex, p, a, b)) {
       const double texels = footprint * picture->texelsPerMetre;
       const MipLevel &P0 = picture->texture.levels.front();
       return sample(picture->texture, a * picture->texelsPerMetre + 0.5 * P0.width - 0.5,

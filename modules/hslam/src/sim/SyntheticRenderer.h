@@ -107,8 +107,9 @@ private:
   float sample(const Texture &T, double tu, double tv, double level) const;
   //! Mip-mapped pyramid of a level-0 image (2x2 box filter).
   static Texture makeTexture(MipLevel level0);
-  //! The picture hung on room face \e face that contains the world point \e p, or null.
-  const Picture *pictureAt(int face, const double p[3]) const;
+  //! The picture hung on room face \e face that contains the world point \e p, or null; \e a, \e b: the point
+  //! along the picture's columns and rows from its centre, metres.
+  const Picture *pictureAt(int face, const double p[3], double &a, double &b) const;
   //! Shade one ray: nearest face, texture look-up with a footprint of pixelAngle radians.
   float shade(const double o[3], const double d[3], double pixelAngle) const;
   void addFace(int normalAxis, const double lo[3], const double hi[3], int texture, float albedo);
