@@ -171,7 +171,16 @@ struct DriftedLoop {
   }
 };
 
-TEST(PoseGraph, RecoversGroundTruthFromADriftedStart)
+class PoseGraphSolvers : public ::testing::TestWithParam<hslam::PoseGraph::Solver>
+{
+};
+INSTANTIATE_TEST_SUITE_P(PoseGraph, PoseGraphSolvers,
+                         ::testing::Values(hslam::PoseGraph::Solver::ceres, hslam::PoseGraph::Solver::sparse),
+                         [](const ::testing::TestParamInfo<hslam::PoseGraph::Solver> &info) {
+                           return info.param == hslam::PoseGraph::Solver::ceres ? "Ceres" : "Sparse";
+                         });
+
+TEST_P(PoseGraphSolvers, RecoversGroundTruthFromADriftedStart)
 {
   // Exact relative constraints, vertices initialised by chaining drifted steps (0.75 m off at the end of the loop,
   // 35 % of scale): the optimum is the ground truth, and the solver must reach it.
@@ -179,7 +188,7 @@ TEST(PoseGraph, RecoversGroundTruthFromADriftedStart)
   hslam::PoseGraph graph;
   loop.build(graph, false);
   const double before = loop.largestCentreError(graph);
-  const hslam::PoseGraphSummary s = graph.optimize(50);
+  const hslam::PoseGraphSummary s = graph.optimize(50, GetParam());
   const double after = loop.largestCentreError(graph);
   std::printf("pose graph (exact edges): largest centre error %.3f m -> %.2e m, %d iterations, %.1f ms\n", before,
               after, s.iterations, s.ms);
@@ -196,7 +205,7 @@ TEST(PoseGraph, RecoversGroundTruthFromADriftedStart)
   EXPECT_THROW(graph.addEdge(bad), vpHSlamException);
 }
 
-TEST(PoseGraph, SpreadsSystematicDriftOverTheLoop)
+TEST_P(PoseGraphSolvers, SpreadsSystematicDriftOverTheLoop)
 {
   // Every odometry edge carries the same drift and one exact loop edge contradicts them: the least-squares answer
   // spreads the contradiction along the loop, so the worst keyframe must end well inside the drifted one's error,
@@ -205,7 +214,7 @@ TEST(PoseGraph, SpreadsSystematicDriftOverTheLoop)
   hslam::PoseGraph graph;
   loop.build(graph, true);
   const double before = loop.largestCentreError(graph);
-  const hslam::PoseGraphSummary s = graph.optimize(50);
+  const hslam::PoseGraphSummary s = graph.optimize(50, GetParam());
   const double after = loop.largestCentreError(graph);
   std::printf("pose graph (drifted edges): largest centre error %.3f m -> %.3f m, cost %.3g -> %.3g\n", before, after,
               s.initialCost, s.finalCost);
@@ -214,9 +223,32 @@ TEST(PoseGraph, SpreadsSystematicDriftOverTheLoop)
   EXPECT_LT(s.finalCost, 0.01 * s.initialCost);
   EXPECT_LT(transformError(graph.vertex(0), loop.truth[0]), 1e-12);
 }
+
+TEST(PoseGraph, SparseSolverReachesCeresSolution)
+{
+  // The drifted loop, whose optimum has residuals left on every edge (where the sparse solver's first-order Jacobians
+  // are not exact): both solvers must land on the same vertices and the same cost, and the automatic choice must
+  // take Ceres for a graph this small.
+  const DriftedLoop loop;
+  hslam::PoseGraph ceres, sparse, automatic;
+  loop.build(ceres, true);
+  loop.build(sparse, true);
+  loop.build(automatic, true);
+  const hslam::PoseGraphSummary c = ceres.optimize(50, hslam::PoseGraph::Solver::ceres);
+  const hslam::PoseGraphSummary s = sparse.optimize(50, hslam::PoseGraph::Solver::sparse);
+  const hslam::PoseGraphSummary a = automatic.optimize(50);
+  ASSERT_TRUE(c.usable && s.usable && a.usable);
+  std::printf("drifted loop: cost %.6g (Ceres, %d iterations) and %.6g (sparse, %d iterations)\n", c.finalCost,
+              c.iterations, s.finalCost, s.iterations);
+  EXPECT_NEAR(s.finalCost, c.finalCost, 1e-4 * c.finalCost);
+  for (int k = 0; k < DriftedLoop::n; ++k) {
+    EXPECT_LT(transformError(sparse.vertex(k), ceres.vertex(k)), 1e-4) << "vertex " << k;
+    EXPECT_EQ(automatic.vertex(k).matrix(), ceres.vertex(k).matrix()) << "vertex " << k;
+  }
+}
 } // namespace
 
-TEST(PoseGraph, SolutionDoesNotDependOnInsertionOrderOrHeapLayout)
+TEST_P(PoseGraphSolvers, SolutionDoesNotDependOnInsertionOrderOrHeapLayout)
 {
   // The drifted loop built twice, vertices added in opposite orders with other allocations in between, stopped
   // after 3 iterations (not converged): bit-identical vertices (the global bundle adjustment's solution was not:
@@ -250,7 +282,7 @@ TEST(PoseGraph, SolutionDoesNotDependOnInsertionOrderOrHeapLayout)
     closing.j = 0;
     closing.Sji = loop.truth[0] * loop.truth[static_cast<size_t>(DriftedLoop::n - 1)].inverse();
     graph->addEdge(closing);
-    EXPECT_TRUE(graph->optimize(3).usable);
+    EXPECT_TRUE(graph->optimize(3, GetParam()).usable);
     return graph;
   };
   const std::unique_ptr<hslam::PoseGraph> a = solve(false);

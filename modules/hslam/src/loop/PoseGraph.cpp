@@ -5,11 +5,13 @@
 
 #include "loop/LoopSolverOptions.h"
 #include "loop/Sim3Parameters.h"
+#include "loop/SparsePoseGraphSolver.h"
 
 #include <visp3/hslam/vpHSlamException.h>
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <chrono>
 
 namespace hslam
@@ -78,8 +80,13 @@ Sim3d PoseGraph::vertex(int id) const
   return sim3FromParameters(it->second.x.data());
 }
 
-PoseGraphSummary PoseGraph::optimize(int maxIterations)
+PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
 {
+  const size_t free = static_cast<size_t>(
+      std::count_if(m_vertices.begin(), m_vertices.end(), [](const auto &v) { return !v.second.fixed; }));
+  if (solver == Solver::sparse || (solver == Solver::automatic && free >= kSparseSolverVertices)) {
+    return optimizeSparse(maxIterations);
+  }
   const auto t0 = std::chrono::steady_clock::now();
   PoseGraphSummary out;
   if (m_edges.empty()) {
@@ -119,6 +126,31 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations)
   out.iterations = static_cast<int>(summary.iterations.size());
   out.initialCost = summary.initial_cost;
   out.finalCost = summary.final_cost;
+  out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return out;
+}
+
+PoseGraphSummary PoseGraph::optimizeSparse(int maxIterations)
+{
+  const auto t0 = std::chrono::steady_clock::now();
+  std::map<int, size_t> position; // vertex id -> index (increasing ids: insertion order is irrelevant)
+  std::vector<Sim3d> S;
+  std::vector<bool> fixed;
+  for (const auto &entry : m_vertices) {
+    position[entry.first] = S.size();
+    S.push_back(sim3FromParameters(entry.second.x.data()));
+    fixed.push_back(entry.second.fixed);
+  }
+  std::vector<std::pair<size_t, size_t>> ends;
+  for (const PoseGraphEdge &e : m_edges) {
+    ends.emplace_back(position[e.i], position[e.j]);
+  }
+  PoseGraphSummary out = solveSparsePoseGraph(S, fixed, m_edges, ends, maxIterations);
+  if (out.usable) {
+    for (auto &entry : m_vertices) {
+      sim3ToParameters(S[position[entry.first]], entry.second.x.data());
+    }
+  }
   out.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return out;
 }

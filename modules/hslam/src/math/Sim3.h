@@ -217,6 +217,23 @@ public:
     return Ad;
   }
 
+  /*!
+    Adjoint of the Lie algebra (7x7), ad_xi eta = vee([hat(xi), hat(eta)]), the first-order term of exp(xi)'s
+    adjoint (Ad_exp(xi) = I + ad_xi + ...). In (upsilon, omega, sigma) order:
+    [[omega]x + sigma I, [upsilon]x, -upsilon; 0, [omega]x, 0; 0, 0, 0].
+  */
+  static Mat7 ad(const Tangent &xi)
+  {
+    const Vec3 upsilon = xi.template head<3>();
+    const Mat3 omegaHat = so3Hat<Scalar>(Vec3(xi.template segment<3>(3)));
+    Mat7 a = Mat7::Zero();
+    a.template block<3, 3>(0, 0) = omegaHat + xi(6) * Mat3::Identity();
+    a.template block<3, 3>(0, 3) = so3Hat<Scalar>(upsilon);
+    a.template block<3, 1>(0, 6) = -upsilon;
+    a.template block<3, 3>(3, 3) = omegaHat;
+    return a;
+  }
+
   //! 4x4 matrix [s R, t; 0, 1].
   Mat4 matrix() const
   {

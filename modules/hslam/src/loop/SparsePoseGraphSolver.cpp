@@ -1,0 +1,316 @@
+/*
+ * H-SLAM for ViSP.
+ */
+#include "loop/SparsePoseGraphSolver.h"
+
+#include "loop/Sim3Parameters.h"
+
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace hslam
+{
+namespace
+{
+using Mat7 = Eigen::Matrix<double, 7, 7>;
+using Vec7 = Eigen::Matrix<double, 7, 1>;
+
+/*!
+  Levenberg-Marquardt settings: Ceres' defaults, which PoseGraph's Ceres path runs with (trust region 1e4, i.e.
+  damping 1e-4 x diag(H); function, gradient and step tolerances 1e-6, 1e-10, 1e-8; diagonal clamped to
+  [1e-6, 1e32]).
+*/
+constexpr double kInitialDamping = 1e-4;
+constexpr double kFunctionTolerance = 1e-6;
+constexpr double kGradientTolerance = 1e-10;
+constexpr double kStepTolerance = 1e-8;
+constexpr double kMinDiagonal = 1e-6;
+constexpr double kMaxDiagonal = 1e32;
+
+//! Error of edge \e e at the vertices (Si, Sj), before weighting: log(S_ji Si Sj^-1).
+Vec7 edgeError(const PoseGraphEdge &e, const Sim3d &Si, const Sim3d &Sj)
+{
+  return (e.Sji * Si * Sj.inverse()).log();
+}
+
+/*!
+  The normal equations' block pattern, built once per optimize(): one 7x7 block per free vertex and per pair of free
+  vertices an edge joins, upper triangle (block row <= block column), column-major as Eigen's sparse Cholesky wants.
+  Each block remembers where its 7 columns start in the value array, so an iteration accumulates straight into it.
+*/
+struct NormalEquations {
+  Eigen::SparseMatrix<double> H;
+  std::vector<std::array<int, 7>> blockColumns; //!< per block, index of (first row, column c) in H's values
+  std::vector<int> diagonal;                    //!< index in H's values of each diagonal entry
+
+  NormalEquations(int freeCount, const std::vector<std::pair<int, int>> &blocks)
+  {
+    const int n = 7 * freeCount;
+    std::vector<Eigen::Triplet<double>> pattern;
+    pattern.reserve(blocks.size() * 49);
+    for (const auto &b : blocks) {
+      for (int r = 0; r < 7; ++r) {
+        for (int c = 0; c < 7; ++c) {
+          pattern.emplace_back(7 * b.first + r, 7 * b.second + c, 0.);
+        }
+      }
+    }
+    H.resize(n, n);
+    H.setFromTriplets(pattern.begin(), pattern.end());
+    H.makeCompressed();
+    const int *outer = H.outerIndexPtr();
+    const int *inner = H.innerIndexPtr();
+    blockColumns.resize(blocks.size());
+    for (size_t k = 0; k < blocks.size(); ++k) {
+      for (int c = 0; c < 7; ++c) {
+        const int col = 7 * blocks[k].second + c;
+        blockColumns[k][static_cast<size_t>(c)] =
+            static_cast<int>(std::lower_bound(inner + outer[col], inner + outer[col + 1], 7 * blocks[k].first) - inner);
+      }
+    }
+    diagonal.resize(static_cast<size_t>(n));
+    for (int col = 0; col < n; ++col) {
+      diagonal[static_cast<size_t>(col)] =
+          static_cast<int>(std::lower_bound(inner + outer[col], inner + outer[col + 1], col) - inner);
+    }
+  }
+
+  //! Adds the 7x7 \e M into block \e k.
+  void add(int k, const Mat7 &M)
+  {
+    double *values = H.valuePtr();
+    for (int c = 0; c < 7; ++c) {
+      Eigen::Map<Vec7>(values + blockColumns[static_cast<size_t>(k)][static_cast<size_t>(c)]) += M.col(c);
+    }
+  }
+};
+
+/*!
+  Levenberg-Marquardt on a pose graph's free vertices (Marquardt's scaling H + damping diag(H), Nielsen's damping
+  update), with the normal equations accumulated block by block and factorised by Eigen's sparse LDL^T (its AMD
+  ordering and symbolic analysis done once). Vertices and edges arrive indexed (vertex ids in increasing order, so the
+  solution does not depend on insertion order or heap layout).
+*/
+class LevenbergMarquardt
+{
+public:
+  LevenbergMarquardt(std::vector<Sim3d> &S, const std::vector<bool> &fixed, const std::vector<PoseGraphEdge> &edges,
+                     const std::vector<std::pair<size_t, size_t>> &ends)
+      : m_S(S), m_edges(edges), m_ends(ends)
+  {
+    for (bool f : fixed) {
+      m_free.push_back(f ? -1 : m_freeCount++);
+    }
+  }
+
+  PoseGraphSummary run(int maxIterations)
+  {
+    PoseGraphSummary out;
+    double current = cost(m_S);
+    out.initialCost = out.finalCost = current;
+    out.usable = std::isfinite(current);
+    if (m_edges.empty() || m_freeCount == 0 || !out.usable) {
+      return out;
+    }
+    orderForFillIn();
+    NormalEquations normal(m_freeCount, blocks());
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> cholesky;
+    cholesky.analyzePattern(normal.H);
+    Eigen::VectorXd gradient(7 * m_freeCount);
+    Eigen::SparseMatrix<double> damped = normal.H;
+    double damping = kInitialDamping, growth = 2.;
+    bool linearized = false;
+    while (out.iterations < maxIterations) {
+      ++out.iterations;
+      if (!linearized) {
+        linearize(normal, gradient);
+        linearized = true;
+        if (gradient.lpNorm<Eigen::Infinity>() <= kGradientTolerance) {
+          break;
+        }
+      }
+      std::copy(normal.H.valuePtr(), normal.H.valuePtr() + normal.H.nonZeros(), damped.valuePtr());
+      for (int d : normal.diagonal) {
+        damped.valuePtr()[d] += damping * std::clamp(normal.H.valuePtr()[d], kMinDiagonal, kMaxDiagonal);
+      }
+      cholesky.factorize(damped);
+      const Eigen::VectorXd step =
+          cholesky.info() == Eigen::Success ? Eigen::VectorXd(cholesky.solve(-gradient)) : Eigen::VectorXd();
+      std::vector<Sim3d> candidate = m_S;
+      double next = std::numeric_limits<double>::infinity(), predicted = 0.;
+      if (step.size() > 0 && step.allFinite() && scalesStayUsable(step)) {
+        for (size_t v = 0; v < m_S.size(); ++v) {
+          if (m_free[v] >= 0) {
+            candidate[v] = Sim3d::exp(step.segment<7>(7 * m_free[v])) * m_S[v];
+          }
+        }
+        next = cost(candidate);
+        // The linear model's decrease: -(g.step + step.H.step / 2).
+        predicted = -(gradient.dot(step) + 0.5 * step.dot(normal.H.selfadjointView<Eigen::Upper>() * step));
+      }
+      if (!(next < current) || !(predicted > 0.)) {
+        damping *= growth;
+        growth *= 2.;
+        continue;
+      }
+      const double rho = (current - next) / predicted;
+      const double decrease = current - next;
+      m_S.swap(candidate);
+      current = next;
+      linearized = false;
+      damping *= std::max(1. / 3., 1. - std::pow(2. * rho - 1., 3));
+      growth = 2.;
+      if (decrease <= kFunctionTolerance * (current + decrease) ||
+          step.norm() <= kStepTolerance * (parameterNorm() + kStepTolerance)) {
+        break;
+      }
+    }
+    out.finalCost = current;
+    return out;
+  }
+
+private:
+  //! 0.5 sum |W log(S_ji Si Sj^-1)|^2 at \e S; infinity when not finite.
+  double cost(const std::vector<Sim3d> &S) const
+  {
+    double sum = 0.;
+    for (size_t k = 0; k < m_edges.size(); ++k) {
+      sum +=
+          (m_edges[k].sqrtInformation * edgeError(m_edges[k], S[m_ends[k].first], S[m_ends[k].second])).squaredNorm();
+    }
+    return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+  }
+
+  //! False when \e step would take a scale beyond e^+-kMaxAbsLogScale (no similarity a map can have): refused.
+  bool scalesStayUsable(const Eigen::VectorXd &step) const
+  {
+    for (size_t v = 0; v < m_S.size(); ++v) {
+      if (m_free[v] >= 0 && std::abs(std::log(m_S[v].scale()) + step(7 * m_free[v] + 6)) >= kMaxAbsLogScale) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  double parameterNorm() const
+  {
+    double sum = 0.;
+    for (const Sim3d &x : m_S) {
+      sum += x.translation().squaredNorm() + x.unitQuaternion().coeffs().squaredNorm() +
+             std::log(x.scale()) * std::log(x.scale());
+    }
+    return std::sqrt(sum);
+  }
+
+  /*!
+    Renumbers the free vertices in the approximate minimum degree order of their block graph, so the factorisation
+    needs no permutation of its own (7x smaller than ordering the scalar matrix, and done once, not per iteration).
+  */
+  void orderForFillIn()
+  {
+    std::vector<Eigen::Triplet<double>> pattern;
+    for (int f = 0; f < m_freeCount; ++f) {
+      pattern.emplace_back(f, f, 1.);
+    }
+    for (const auto &end : m_ends) {
+      const int fi = m_free[end.first], fj = m_free[end.second];
+      if (fi >= 0 && fj >= 0) {
+        pattern.emplace_back(fi, fj, 1.);
+        pattern.emplace_back(fj, fi, 1.);
+      }
+    }
+    Eigen::SparseMatrix<double> graph(m_freeCount, m_freeCount);
+    graph.setFromTriplets(pattern.begin(), pattern.end());
+    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+    Eigen::AMDOrdering<int>()(graph, inverse);
+    const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+    for (int &f : m_free) {
+      f = f >= 0 ? order.indices()[f] : -1;
+    }
+  }
+
+  //! The normal equations' blocks: every free vertex's, then each pair of free vertices an edge joins (upper).
+  std::vector<std::pair<int, int>> blocks()
+  {
+    std::vector<std::pair<int, int>> out;
+    for (int f = 0; f < m_freeCount; ++f) {
+      out.emplace_back(f, f);
+    }
+    std::map<std::pair<int, int>, int> offDiagonal;
+    m_offDiagonalBlock.assign(m_edges.size(), -1);
+    for (size_t k = 0; k < m_edges.size(); ++k) {
+      const int fi = m_free[m_ends[k].first], fj = m_free[m_ends[k].second];
+      if (fi >= 0 && fj >= 0) {
+        const std::pair<int, int> key(std::min(fi, fj), std::max(fi, fj));
+        auto it = offDiagonal.emplace(key, static_cast<int>(out.size())).first;
+        if (it->second == static_cast<int>(out.size())) {
+          out.push_back(key);
+        }
+        m_offDiagonalBlock[k] = it->second;
+      }
+    }
+    return out;
+  }
+
+  /*!
+    Linearises every edge at the current vertices into \e normal (H = sum J^T J over the free vertices' blocks) and
+    \e gradient (J^T r). With left updates S <- exp(delta) S, the error e = log(S_ji Si Sj^-1) moves by
+    de/d(delta_i) = Jl^-1(e) Ad(S_ji) and de/d(delta_j) = -Jr^-1(e), with Jl^-1(e) ~ I - ad(e)/2 and
+    Jr^-1(e) ~ I + ad(e)/2 to first order in e (a pose graph's residuals are small near its solution; where they
+    vanish, the fixed point J^T r = 0 is the exact one whatever the Jacobian's approximation).
+  */
+  void linearize(NormalEquations &normal, Eigen::VectorXd &gradient) const
+  {
+    std::fill(normal.H.valuePtr(), normal.H.valuePtr() + normal.H.nonZeros(), 0.);
+    gradient.setZero();
+    for (size_t k = 0; k < m_edges.size(); ++k) {
+      const PoseGraphEdge &e = m_edges[k];
+      const int fi = m_free[m_ends[k].first], fj = m_free[m_ends[k].second];
+      if (fi < 0 && fj < 0) {
+        continue;
+      }
+      const Vec7 err = edgeError(e, m_S[m_ends[k].first], m_S[m_ends[k].second]);
+      const Mat7 halfAd = 0.5 * Sim3d::ad(err);
+      const Vec7 r = e.sqrtInformation * err;
+      const Mat7 Ji = e.sqrtInformation * (Mat7::Identity() - halfAd) * e.Sji.adjoint();
+      const Mat7 Jj = -e.sqrtInformation * (Mat7::Identity() + halfAd);
+      if (fi >= 0) {
+        normal.add(fi, Ji.transpose() * Ji);
+        gradient.segment<7>(7 * fi) += Ji.transpose() * r;
+      }
+      if (fj >= 0) {
+        normal.add(fj, Jj.transpose() * Jj);
+        gradient.segment<7>(7 * fj) += Jj.transpose() * r;
+      }
+      if (m_offDiagonalBlock[k] >= 0) { // above the diagonal: the lower free index is the block's row
+        normal.add(m_offDiagonalBlock[k], fi < fj ? Mat7(Ji.transpose() * Jj) : Mat7(Jj.transpose() * Ji));
+      }
+    }
+  }
+
+  std::vector<Sim3d> &m_S;
+  const std::vector<PoseGraphEdge> &m_edges;
+  const std::vector<std::pair<size_t, size_t>> &m_ends; //!< per edge, positions of i and j in m_S
+  std::vector<int> m_free;                              //!< per vertex, its index among the free ones, or -1
+  int m_freeCount = 0;
+  std::vector<int> m_offDiagonalBlock; //!< per edge, its off-diagonal block, or -1 (an end is fixed)
+};
+} // namespace
+
+PoseGraphSummary solveSparsePoseGraph(std::vector<Sim3d> &S, const std::vector<bool> &fixed,
+                                      const std::vector<PoseGraphEdge> &edges,
+                                      const std::vector<std::pair<size_t, size_t>> &ends, int maxIterations)
+{
+  PoseGraphSummary out = LevenbergMarquardt(S, fixed, edges, ends).run(maxIterations);
+  out.usable = out.usable && std::all_of(S.begin(), S.end(), [](const Sim3d &x) {
+                 return x.translation().allFinite() && x.unitQuaternion().coeffs().allFinite();
+               });
+  return out;
+}
+} // namespace hslam
