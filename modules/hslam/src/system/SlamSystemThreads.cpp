@@ -374,6 +374,7 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.lastLoopCorrectionMs = loops.applied.lastCorrectionMs;
   s.loopCorrectionMsMax = loops.applied.correctionMsMax;
   s.loopDetectionMsMean = loops.detections > 0 ? loops.detectionMsTotal / loops.detections : 0.;
+  s.loopDetections = static_cast<unsigned int>(loops.detections);
   s.loopVerificationMsMax = loops.verificationMsMax;
   s.globalBundleAdjustments = static_cast<unsigned int>(loops.applied.globalBaStarted);
   s.globalBundleAdjustmentsApplied = static_cast<unsigned int>(loops.applied.globalBaApplied);

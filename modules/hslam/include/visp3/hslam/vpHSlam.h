@@ -161,6 +161,7 @@ public:
     double lastLoopCorrectionMs = 0.;            //!< slam mode: wall time of the last correction, milliseconds
     double loopCorrectionMsMax = 0.;             //!< slam mode: longest correction (pose graph, map update), ms
     double loopDetectionMsMean = 0.;             //!< slam mode: loop detection per keyframe (query, verification), ms
+    unsigned int loopDetections = 0;             //!< slam mode: keyframes that went through loop detection
     double loopVerificationMsMax = 0.;           //!< slam mode: longest verification of a candidate (Sim(3)), ms
     unsigned int globalBundleAdjustments = 0;    //!< slam mode: global bundle adjustments started (one per correction)
     unsigned int globalBundleAdjustmentsApplied = 0; //!< ... written back (not stopped by a newer loop, usable)

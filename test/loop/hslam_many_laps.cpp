@@ -1,0 +1,149 @@
+// Loop closure at scale, end to end (issue 50): the synthetic outward room driven lap after lap, rendered in memory
+// at a small size, fed to one system in slam mode (deterministic, the defaults otherwise) until it has stored the
+// asked number of keyframes. Every --report keyframes it prints one line: stored keyframes, the mean loop detection
+// time per keyframe over that stretch (query, consistency, verification), the corrections applied so far and the
+// last one's time with the map size it ran on, and the process's peak resident memory. With --no-reuse the global
+// map's re-use is off, so every revisit is reconciled by loop closure alone and corrections happen at every size.
+//
+//   hslam_many_laps [--keyframes 10000] [--width 320 --height 240] [--report 500] [--budget POINTS] [--no-reuse]
+//                   [--max-laps 400]
+//
+// Labelled a benchmark: tens of minutes on a 2-core machine for 10,000 keyframes; not run by CI.
+#include "../system/SystemTestUtils.h"
+
+#include <visp3/hslam/vpHSlamException.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <string>
+
+namespace
+{
+//! Peak resident memory of the process, MB (VmHWM), or -1 when /proc is not there.
+double peakResidentMb()
+{
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) {
+      return std::atof(line.c_str() + 6) / 1024.;
+    }
+  }
+  return -1.;
+}
+
+struct Options {
+  unsigned int keyframes = 10000, width = 320, height = 240, report = 500, budget = 0, maxLaps = 400;
+  bool reuse = true;
+};
+
+bool parse(int argc, char **argv, Options &o)
+{
+  for (int k = 1; k < argc; ++k) {
+    const std::string arg = argv[k];
+    auto value = [&](unsigned int &out) {
+      if (k + 1 >= argc) {
+        return false;
+      }
+      const long v = std::atol(argv[++k]);
+      out = v > 0 ? static_cast<unsigned int>(v) : 0;
+      return v > 0;
+    };
+    bool ok = true;
+    if (arg == "--keyframes") {
+      ok = value(o.keyframes);
+    } else if (arg == "--width") {
+      ok = value(o.width);
+    } else if (arg == "--height") {
+      ok = value(o.height);
+    } else if (arg == "--report") {
+      ok = value(o.report);
+    } else if (arg == "--budget") {
+      ok = value(o.budget);
+    } else if (arg == "--max-laps") {
+      ok = value(o.maxLaps);
+    } else if (arg == "--no-reuse") {
+      o.reuse = false;
+    } else {
+      ok = false;
+    }
+    if (!ok) {
+      return false;
+    }
+  }
+  return true;
+}
+} // namespace
+
+int main(int argc, char **argv)
+{
+  Options o;
+  if (!parse(argc, argv, o)) {
+    std::cerr << "usage: " << argv[0]
+              << " [--keyframes N] [--width W --height H] [--report N] [--budget POINTS] [--no-reuse] [--max-laps N]\n";
+    return EXIT_FAILURE;
+  }
+  if (hslam_test::vispImagesDir().empty()) {
+    std::cerr << "needs visp-images-data (the room's textures)\n";
+    return EXIT_FAILURE;
+  }
+  try {
+    constexpr unsigned int kFramesPerLap = 400; // the outward room's least (a full turn per lap)
+    vpHSlamSyntheticScene scene;
+    scene.setLaps(o.maxLaps);
+    scene.setLookOutward(true);
+    scene.configure(o.width, o.height, kFramesPerLap * o.maxLaps + 1, 30., 1);
+    vpHSlamParameters params;
+    params.system.deterministic = true;
+    params.globalMap.reuse = o.reuse;
+    if (o.budget > 0) {
+      params.features.desiredImmatureDensity = static_cast<int>(o.budget);
+    }
+    vpHSlam slam(hslam_test::syntheticCamera(scene), params);
+    std::cout << "# " << o.width << "x" << o.height << ", re-use " << (o.reuse ? "on" : "off") << ", budget "
+              << params.features.desiredImmatureDensity << "\n"
+              << "# frame stored_keyframes segments detection_ms_mean_since_last corrections last_correction_ms "
+                 "last_correction_at_keyframes peak_rss_mb\n";
+    vpImage<unsigned char> I;
+    unsigned int nextReport = o.report, correctionsSeen = 0, correctionAt = 0;
+    double detectionTotal = 0.;
+    unsigned int detections = 0;
+    vpHSlam::Statistics s;
+    for (unsigned int i = 0; i < scene.getFrameCount(); ++i) {
+      scene.render(i, I);
+      slam.track(I, scene.getTimestamp(i));
+      if (i % 50 != 0) {
+        continue;
+      }
+      s = slam.getStatistics();
+      if (s.loopsCorrected != correctionsSeen) {
+        correctionsSeen = s.loopsCorrected;
+        correctionAt = s.marginalizedKeyframes;
+      }
+      if (s.marginalizedKeyframes >= nextReport || s.marginalizedKeyframes >= o.keyframes) {
+        const double total = s.loopDetectionMsMean * s.loopDetections;
+        const unsigned int count = s.loopDetections - detections;
+        std::cout << i << " " << s.marginalizedKeyframes << " " << s.segments << " "
+                  << (count > 0 ? (total - detectionTotal) / count : 0.) << " " << s.loopsCorrected << " "
+                  << s.lastLoopCorrectionMs << " " << correctionAt << " " << peakResidentMb() << std::endl;
+        detectionTotal = total;
+        detections = s.loopDetections;
+        nextReport = s.marginalizedKeyframes + o.report;
+      }
+      if (s.marginalizedKeyframes >= o.keyframes) {
+        break;
+      }
+    }
+    slam.synchronize();
+    s = slam.getStatistics();
+    std::cout << "# end: " << s.marginalizedKeyframes << " stored keyframes, " << s.loopsCorrected
+              << " corrections (longest " << s.loopCorrectionMsMax << " ms), loop detection " << s.loopDetectionMsMean
+              << " ms per keyframe, tracking " << s.trackingMsMedian << " ms per frame (median), peak resident memory "
+              << peakResidentMb() << " MB" << std::endl;
+  } catch (const vpHSlamException &e) {
+    std::cerr << "error: " << e.getStringMessage() << "\n";
+    return EXIT_FAILURE;
+  }
+  return EXIT_SUCCESS;
+}
