@@ -60,6 +60,31 @@ TEST(Sim3Solver, HornRecoversAKnownSimilarityExactly)
                vpHSlamException);
 }
 
+TEST(Sim3Solver, RefinementRefusesAScaleNoMapCanHave)
+{
+  // A RANSAC hypothesis from a degenerate sample can carry a scale beyond e^+-20; Ceres aborts the process on a
+  // parameter block its manifold cannot be evaluated at (hslam_many_laps did, at 650 stored keyframes). The
+  // refinement must refuse such a start, and must still run from a scale on the bound itself.
+  const PinholeIntrinsics K = hslam_test::vgaPinhole500();
+  std::vector<hslam::Sim3Correspondence> matches;
+  for (int i = 0; i < 12; ++i) {
+    hslam::Sim3Correspondence m;
+    m.X1 = Eigen::Vector3d(0.2 * (i % 4) - 0.3, 0.15 * (i / 4) - 0.15, 3. + 0.1 * i);
+    m.X2 = m.X1;
+    m.uv1 = m.uv2 = projectPoint(K, m.X1);
+    matches.push_back(m);
+  }
+  for (double logScale : {-21.3, 25.}) {
+    Sim3d S(Eigen::Quaterniond::Identity(), Eigen::Vector3d::Zero(), std::exp(logScale));
+    const Sim3d before = S;
+    EXPECT_FALSE(hslam::refineSim3(matches, K, K, 1., S)) << "log-scale " << logScale;
+    EXPECT_EQ(S.matrix(), before.matrix());
+  }
+  Sim3d onTheBound(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0.01, 0., 0.), std::exp(-20.));
+  hslam::refineSim3(matches, K, K, 1., onTheBound); // whatever it returns, it returns
+  EXPECT_TRUE(onTheBound.translation().allFinite());
+}
+
 TEST(Sim3Solver, RansacFindsTheSimilarityDespiteNoiseAndOutliers)
 {
   // Two keyframes seeing the same 150 points; the second keyframe's map has a scale of 1.6 (monocular drift).
@@ -222,6 +247,18 @@ TEST_P(PoseGraphSolvers, SpreadsSystematicDriftOverTheLoop)
   EXPECT_LT(after, 0.3 * before);
   EXPECT_LT(s.finalCost, 0.01 * s.initialCost);
   EXPECT_LT(transformError(graph.vertex(0), loop.truth[0]), 1e-12);
+}
+
+TEST(PoseGraph, AVertexWithAScaleNoMapCanHaveIsRefusedNotAborted)
+{
+  const DriftedLoop loop;
+  hslam::PoseGraph graph;
+  loop.build(graph, true);
+  graph.addVertex(5, Sim3d(loop.truth[5].unitQuaternion(), loop.truth[5].translation(), std::exp(-21.)));
+  const Sim3d before = graph.vertex(7);
+  const hslam::PoseGraphSummary s = graph.optimize(50, hslam::PoseGraph::Solver::ceres);
+  EXPECT_FALSE(s.usable);
+  EXPECT_EQ(graph.vertex(7).matrix(), before.matrix()); // nothing written
 }
 
 TEST(PoseGraph, SparseSolverReachesCeresSolution)

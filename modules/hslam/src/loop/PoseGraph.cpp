@@ -93,6 +93,11 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
     out.usable = true;
     return out;
   }
+  for (const auto &entry : m_vertices) {
+    if (!sim3ParametersValid(entry.second.x.data())) {
+      return out; // not usable: Ceres aborts on a parameter block its manifold cannot be evaluated at
+    }
+  }
   ceres::Problem::Options problemOptions;
   problemOptions.manifold_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problemOptions);

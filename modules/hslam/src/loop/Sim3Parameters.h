@@ -67,10 +67,14 @@ template <typename T> bool allFinite(const T *x, int n)
   return true;
 }
 
-//! Finite parameters with a usable scale (Sim3's constructor would throw on a scale that underflows to 0).
+/*!
+  Finite parameters with a usable scale (Sim3's constructor would throw on a scale that underflows to 0). The bounds
+  are included: Sim3LeftPlus saturates a step onto them, and a parameter block Ceres cannot evaluate its manifold at
+  is a fatal CHECK in Ceres (a 650-keyframe run of hslam_many_laps aborted on one).
+*/
 template <typename T> bool sim3ParametersValid(const T *x)
 {
-  return allFinite(x, kSim3ParameterSize) && x[7] < T(kMaxAbsLogScale) && x[7] > T(-kMaxAbsLogScale);
+  return allFinite(x, kSim3ParameterSize) && x[7] <= T(kMaxAbsLogScale) && x[7] >= T(-kMaxAbsLogScale);
 }
 
 //! Left-multiplicative update on Sim(3) (see file comment).

@@ -146,6 +146,9 @@ bool refineSim3(const std::vector<Sim3Correspondence> &matches, const PinholeInt
     return false;
   }
   std::array<double, kSim3ParameterSize> x = sim3Parameters(S21);
+  if (!sim3ParametersValid(x.data())) {
+    return false; // a scale beyond e^+-20 (Horn on a degenerate sample): Ceres would abort on it
+  }
   ceres::Problem problem;
   for (const Sim3Correspondence &m : matches) {
     problem.AddResidualBlock(
