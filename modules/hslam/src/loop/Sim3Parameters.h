@@ -94,6 +94,13 @@ struct Sim3LeftPlus {
       d(6) = T(-kMaxAbsLogScale) - x[7];
     }
     sim3ToParameters(Sim3<T>::exp(d) * sim3FromParameters(x), out);
+    // exp(d) * S rounds: a step saturated onto a bound can land a last digit beyond it, where the next evaluation
+    // would be refused (Ceres then logs a warning per refused Jacobian, and CHECK-fails at a block's start).
+    if (out[7] > T(kMaxAbsLogScale)) {
+      out[7] = T(kMaxAbsLogScale);
+    } else if (out[7] < T(-kMaxAbsLogScale)) {
+      out[7] = T(-kMaxAbsLogScale);
+    }
     return true;
   }
   template <typename T> bool Minus(const T *y, const T *x, T *out) const
