@@ -84,7 +84,8 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
 {
   const size_t free = static_cast<size_t>(
       std::count_if(m_vertices.begin(), m_vertices.end(), [](const auto &v) { return !v.second.fixed; }));
-  if (solver == Solver::sparse || (solver == Solver::automatic && free >= kSparseSolverVertices)) {
+  if (solver == Solver::sparse ||
+      (solver == Solver::automatic && (free >= kSparseSolverVertices || m_edges.size() >= kSparseSolverEdges))) {
     return optimizeSparse(maxIterations);
   }
   const auto t0 = std::chrono::steady_clock::now();

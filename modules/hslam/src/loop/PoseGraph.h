@@ -12,8 +12,8 @@
   tangent order of Sim3.h). Fixed vertices (the active window and the newest keyframes, which the window's priors
   tie down, and the corrected loop side) are held constant. Solved by Levenberg-Marquardt, vertices updated on the
   left on the Sim(3) manifold: in Ceres (automatic differentiation, sparse Cholesky on the normal equations) below
-  kSparseSolverVertices free vertices, by loop/SparsePoseGraphSolver.h (analytic Jacobians, block-sparse normal
-  equations) from there on.
+  kSparseSolverVertices free vertices and kSparseSolverEdges edges, by loop/SparsePoseGraphSolver.h (analytic
+  Jacobians, block-sparse normal equations) from there on.
 
   Why two: at 10,000 keyframes Ceres takes 5.1 s and the sparse solver 0.7 s (loop benchmark). On the loops of the
   synthetic and real runs the two reach the same cost to the digits printed, but a run that continues after a
@@ -66,12 +66,18 @@ public:
 
   //! Which solver optimize() uses.
   enum class Solver {
-    automatic, //!< Ceres below kSparseSolverVertices free vertices, the sparse solver from there on
+    automatic, //!< Ceres below kSparseSolverVertices free vertices and kSparseSolverEdges edges, else sparse
     ceres,     //!< Ceres (automatic differentiation)
     sparse     //!< loop/SparsePoseGraphSolver.h
   };
   //! Free vertices from which Solver::automatic takes the sparse solver (Ceres: 0.32 s at 1,000 keyframes here).
   static constexpr size_t kSparseSolverVertices = 1000;
+  /*!
+    Edges from which Solver::automatic takes the sparse solver: Ceres costs about 18 us per edge and iteration here
+    (automatic differentiation), so a graph made dense by many loops (each adds an edge per pair of its two sides'
+    keyframes) passes a second long before 1,000 keyframes: 6.9 s at 967 in hslam_many_laps with re-use off.
+  */
+  static constexpr size_t kSparseSolverEdges = 4000;
 
   PoseGraphSummary optimize(int maxIterations = 20, Solver solver = Solver::automatic);
 
