@@ -4,14 +4,16 @@
 // time per keyframe over that stretch (query, consistency, verification), the corrections applied so far and the
 // last one's time with the map size it ran on, and the process's peak resident memory. With --no-reuse the global
 // map's re-use is off, so every revisit is reconciled by loop closure alone and corrections happen at every size.
+// --log writes the library's info messages (each loop, its pose graph and correction time) to stderr.
 //
 //   hslam_many_laps [--keyframes 10000] [--width 320 --height 240] [--report 500] [--budget POINTS] [--no-reuse]
-//                   [--max-laps 400]
+//                   [--max-laps 400] [--log]
 //
 // Labelled a benchmark: tens of minutes on a 2-core machine for 10,000 keyframes; not run by CI.
 #include "../system/SystemTestUtils.h"
 
 #include <visp3/hslam/vpHSlamException.h>
+#include <visp3/hslam/vpHSlamLog.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -65,6 +67,9 @@ bool parse(int argc, char **argv, Options &o)
       ok = value(o.maxLaps);
     } else if (arg == "--no-reuse") {
       o.reuse = false;
+    } else if (arg == "--log") {
+      vpHSlamLog::setSink(vpHSlamLog::stderrSink());
+      vpHSlamLog::setLevel(vpHSlamLog::info);
     } else {
       ok = false;
     }
@@ -81,7 +86,8 @@ int main(int argc, char **argv)
   Options o;
   if (!parse(argc, argv, o)) {
     std::cerr << "usage: " << argv[0]
-              << " [--keyframes N] [--width W --height H] [--report N] [--budget POINTS] [--no-reuse] [--max-laps N]\n";
+              << " [--keyframes N] [--width W --height H] [--report N] [--budget POINTS] [--no-reuse] [--max-laps N]"
+                 " [--log]\n";
     return EXIT_FAILURE;
   }
   if (hslam_test::vispImagesDir().empty()) {
