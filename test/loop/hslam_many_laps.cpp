@@ -18,6 +18,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <string>
 
 namespace
@@ -42,38 +43,24 @@ struct Options {
 
 bool parse(int argc, char **argv, Options &o)
 {
+  const std::map<std::string, unsigned int *> counts = {{"--keyframes", &o.keyframes}, {"--width", &o.width},
+                                                        {"--height", &o.height},       {"--report", &o.report},
+                                                        {"--budget", &o.budget},       {"--max-laps", &o.maxLaps}};
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
-    auto value = [&](unsigned int &out) {
-      if (k + 1 >= argc) {
+    const auto count = counts.find(arg);
+    if (count != counts.end()) { // a positive count
+      const long v = k + 1 < argc ? std::atol(argv[++k]) : 0;
+      if (v <= 0) {
         return false;
       }
-      const long v = std::atol(argv[++k]);
-      out = v > 0 ? static_cast<unsigned int>(v) : 0;
-      return v > 0;
-    };
-    bool ok = true;
-    if (arg == "--keyframes") {
-      ok = value(o.keyframes);
-    } else if (arg == "--width") {
-      ok = value(o.width);
-    } else if (arg == "--height") {
-      ok = value(o.height);
-    } else if (arg == "--report") {
-      ok = value(o.report);
-    } else if (arg == "--budget") {
-      ok = value(o.budget);
-    } else if (arg == "--max-laps") {
-      ok = value(o.maxLaps);
+      *count->second = static_cast<unsigned int>(v);
     } else if (arg == "--no-reuse") {
       o.reuse = false;
     } else if (arg == "--log") {
       vpHSlamLog::setSink(vpHSlamLog::stderrSink());
       vpHSlamLog::setLevel(vpHSlamLog::info);
     } else {
-      ok = false;
-    }
-    if (!ok) {
       return false;
     }
   }

@@ -92,6 +92,62 @@ struct NormalEquations {
 };
 
 /*!
+  Renumbers the free vertices (\e free: per vertex its index among the free ones, or -1) in the approximate minimum
+  degree order of their block graph, so the factorisation needs no permutation of its own (7x smaller than ordering
+  the scalar matrix, and done once, not per iteration).
+*/
+void orderForFillIn(int freeCount, const std::vector<std::pair<size_t, size_t>> &ends, std::vector<int> &free)
+{
+  std::vector<Eigen::Triplet<double>> pattern;
+  for (int f = 0; f < freeCount; ++f) {
+    pattern.emplace_back(f, f, 1.);
+  }
+  for (const auto &end : ends) {
+    const int fi = free[end.first], fj = free[end.second];
+    if (fi >= 0 && fj >= 0) {
+      pattern.emplace_back(fi, fj, 1.);
+      pattern.emplace_back(fj, fi, 1.);
+    }
+  }
+  Eigen::SparseMatrix<double> graph(freeCount, freeCount);
+  graph.setFromTriplets(pattern.begin(), pattern.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
+  Eigen::AMDOrdering<int>()(graph, inverse);
+  const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
+  for (int &f : free) {
+    f = f >= 0 ? order.indices()[f] : -1;
+  }
+}
+
+/*!
+  The normal equations' blocks: every free vertex's, then each pair of free vertices an edge joins (upper); per edge,
+  its off-diagonal block into \e offDiagonalBlock (-1 when an end is fixed).
+*/
+std::vector<std::pair<int, int>> normalBlocks(int freeCount, const std::vector<int> &free,
+                                              const std::vector<std::pair<size_t, size_t>> &ends,
+                                              std::vector<int> &offDiagonalBlock)
+{
+  std::vector<std::pair<int, int>> out;
+  for (int f = 0; f < freeCount; ++f) {
+    out.emplace_back(f, f);
+  }
+  std::map<std::pair<int, int>, int> offDiagonal;
+  offDiagonalBlock.assign(ends.size(), -1);
+  for (size_t k = 0; k < ends.size(); ++k) {
+    const int fi = free[ends[k].first], fj = free[ends[k].second];
+    if (fi >= 0 && fj >= 0) {
+      const std::pair<int, int> key(std::min(fi, fj), std::max(fi, fj));
+      auto it = offDiagonal.emplace(key, static_cast<int>(out.size())).first;
+      if (it->second == static_cast<int>(out.size())) {
+        out.push_back(key);
+      }
+      offDiagonalBlock[k] = it->second;
+    }
+  }
+  return out;
+}
+
+/*!
   Levenberg-Marquardt on a pose graph's free vertices (Marquardt's scaling H + damping diag(H), Nielsen's damping
   update), with the normal equations accumulated block by block and factorised by Eigen's sparse LDL^T (its AMD
   ordering and symbolic analysis done once). Vertices and edges arrive indexed (vertex ids in increasing order, so the
@@ -118,9 +174,9 @@ public:
     if (m_edges.empty() || m_freeCount == 0 || !out.usable) {
       return out;
     }
-    orderForFillIn();
-    NormalEquations normal(m_freeCount, blocks());
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> cholesky;
+    orderForFillIn(m_freeCount, m_ends, m_free);
+    NormalEquations normal(m_freeCount, normalBlocks(m_freeCount, m_free, m_ends, m_offDiagonalBlock));
+    Cholesky cholesky;
     cholesky.analyzePattern(normal.H);
     Eigen::VectorXd gradient(7 * m_freeCount);
     Eigen::SparseMatrix<double> damped = normal.H;
@@ -135,25 +191,13 @@ public:
           break;
         }
       }
-      std::copy(normal.H.valuePtr(), normal.H.valuePtr() + normal.H.nonZeros(), damped.valuePtr());
-      for (int d : normal.diagonal) {
-        damped.valuePtr()[d] += damping * std::clamp(normal.H.valuePtr()[d], kMinDiagonal, kMaxDiagonal);
-      }
-      cholesky.factorize(damped);
-      const Eigen::VectorXd step =
-          cholesky.info() == Eigen::Success ? Eigen::VectorXd(cholesky.solve(-gradient)) : Eigen::VectorXd();
-      std::vector<Sim3d> candidate = m_S;
-      double next = std::numeric_limits<double>::infinity(), predicted = 0.;
-      if (step.size() > 0 && step.allFinite() && scalesStayUsable(step)) {
-        for (size_t v = 0; v < m_S.size(); ++v) {
-          if (m_free[v] >= 0) {
-            candidate[v] = Sim3d::exp(step.segment<7>(7 * m_free[v])) * m_S[v];
-          }
-        }
-        next = cost(candidate);
-        // The linear model's decrease: -(g.step + step.H.step / 2).
-        predicted = -(gradient.dot(step) + 0.5 * step.dot(normal.H.selfadjointView<Eigen::Upper>() * step));
-      }
+      const Eigen::VectorXd step = dampedStep(normal, gradient, damping, damped, cholesky);
+      std::vector<Sim3d> candidate;
+      const double next = costAfter(step, candidate);
+      // The linear model's decrease: -(g.step + step.H.step / 2).
+      const double predicted =
+          candidate.empty() ? 0.
+                            : -(gradient.dot(step) + 0.5 * step.dot(normal.H.selfadjointView<Eigen::Upper>() * step));
       if (!(next < current) || !(predicted > 0.)) {
         damping *= growth;
         growth *= 2.;
@@ -176,6 +220,38 @@ public:
   }
 
 private:
+  using Cholesky = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>>;
+
+  //! The step of (H + damping diag(H)) step = -gradient, \e damped holding that matrix; empty when not factorisable.
+  static Eigen::VectorXd dampedStep(const NormalEquations &normal, const Eigen::VectorXd &gradient, double damping,
+                                    Eigen::SparseMatrix<double> &damped, Cholesky &cholesky)
+  {
+    std::copy(normal.H.valuePtr(), normal.H.valuePtr() + normal.H.nonZeros(), damped.valuePtr());
+    for (int d : normal.diagonal) {
+      damped.valuePtr()[d] += damping * std::clamp(normal.H.valuePtr()[d], kMinDiagonal, kMaxDiagonal);
+    }
+    cholesky.factorize(damped);
+    return cholesky.info() == Eigen::Success ? Eigen::VectorXd(cholesky.solve(-gradient)) : Eigen::VectorXd();
+  }
+
+  /*!
+    The vertices moved by \e step into \e candidate and their cost; infinity, \e candidate left empty, for a step
+    that is empty, not finite or would take a scale out of bounds.
+  */
+  double costAfter(const Eigen::VectorXd &step, std::vector<Sim3d> &candidate) const
+  {
+    if (step.size() == 0 || !step.allFinite() || !scalesStayUsable(step)) {
+      return std::numeric_limits<double>::infinity();
+    }
+    candidate = m_S;
+    for (size_t v = 0; v < m_S.size(); ++v) {
+      if (m_free[v] >= 0) {
+        candidate[v] = Sim3d::exp(step.segment<7>(7 * m_free[v])) * m_S[v];
+      }
+    }
+    return cost(candidate);
+  }
+
   //! 0.5 sum |W log(S_ji Si Sj^-1)|^2 at \e S; infinity when not finite.
   double cost(const std::vector<Sim3d> &S) const
   {
@@ -206,56 +282,6 @@ private:
              std::log(x.scale()) * std::log(x.scale());
     }
     return std::sqrt(sum);
-  }
-
-  /*!
-    Renumbers the free vertices in the approximate minimum degree order of their block graph, so the factorisation
-    needs no permutation of its own (7x smaller than ordering the scalar matrix, and done once, not per iteration).
-  */
-  void orderForFillIn()
-  {
-    std::vector<Eigen::Triplet<double>> pattern;
-    for (int f = 0; f < m_freeCount; ++f) {
-      pattern.emplace_back(f, f, 1.);
-    }
-    for (const auto &end : m_ends) {
-      const int fi = m_free[end.first], fj = m_free[end.second];
-      if (fi >= 0 && fj >= 0) {
-        pattern.emplace_back(fi, fj, 1.);
-        pattern.emplace_back(fj, fi, 1.);
-      }
-    }
-    Eigen::SparseMatrix<double> graph(m_freeCount, m_freeCount);
-    graph.setFromTriplets(pattern.begin(), pattern.end());
-    Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> inverse;
-    Eigen::AMDOrdering<int>()(graph, inverse);
-    const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order = inverse.inverse();
-    for (int &f : m_free) {
-      f = f >= 0 ? order.indices()[f] : -1;
-    }
-  }
-
-  //! The normal equations' blocks: every free vertex's, then each pair of free vertices an edge joins (upper).
-  std::vector<std::pair<int, int>> blocks()
-  {
-    std::vector<std::pair<int, int>> out;
-    for (int f = 0; f < m_freeCount; ++f) {
-      out.emplace_back(f, f);
-    }
-    std::map<std::pair<int, int>, int> offDiagonal;
-    m_offDiagonalBlock.assign(m_edges.size(), -1);
-    for (size_t k = 0; k < m_edges.size(); ++k) {
-      const int fi = m_free[m_ends[k].first], fj = m_free[m_ends[k].second];
-      if (fi >= 0 && fj >= 0) {
-        const std::pair<int, int> key(std::min(fi, fj), std::max(fi, fj));
-        auto it = offDiagonal.emplace(key, static_cast<int>(out.size())).first;
-        if (it->second == static_cast<int>(out.size())) {
-          out.push_back(key);
-        }
-        m_offDiagonalBlock[k] = it->second;
-      }
-    }
-    return out;
   }
 
   /*!
