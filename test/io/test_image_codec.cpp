@@ -158,6 +158,13 @@ TEST(ImageCodec, BadDataGivesClearErrors)
   expectError({'P', '5', '\n', 'x'}, "header");
   const std::vector<unsigned char> jpg = encode(".jpg", grey);
   expectError(std::vector<unsigned char>(jpg.begin(), jpg.begin() + 4), "cannot decode"); // libjpeg's own message
+  // Headers asking for more than the data holds, or than any camera gives, are refused before anything is allocated
+  // (a fuzzer's plain PGM of 22554 x 56196 pixels once made us allocate 2.5 GB).
+  const auto bytesOf = [](const std::string &text) { return std::vector<unsigned char>(text.begin(), text.end()); };
+  expectError(bytesOf("P2\n22554 56196 255\n1 2 3\n"), "out of range");
+  expectError(bytesOf("P2\n4000 4000 255\n1 2 3\n"), "ends early");
+  expectError(bytesOf("P5\n8000 8000 65535\n" + std::string(64, 'x')), "ends early");
+  expectError(encode(".png", cv::Mat::zeros(9000, 9000, CV_8UC1)), "bad image size");
 }
 
 TEST_F(ImageCodecFiles, PngWriteRoundTrips)

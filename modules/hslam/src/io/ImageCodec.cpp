@@ -25,6 +25,16 @@ namespace
 constexpr std::size_t kMessageSize = 200;
 //! Largest side accepted, pixels: a corrupt header must not ask for terabytes.
 constexpr unsigned long kMaxSide = 1u << 16;
+//! Largest image accepted, pixels (8192 x 8192): two sides under kMaxSide still multiply to 4 G pixels, which a
+//! corrupt or hostile header would make us allocate before the data is read. No camera this library serves comes near.
+constexpr unsigned long long kMaxPixels = 1ull << 26;
+
+//! Whether a header's size is one we decode (each side and the product).
+bool imageSizeAccepted(unsigned long width, unsigned long height)
+{
+  return width > 0 && height > 0 && width <= kMaxSide && height <= kMaxSide &&
+         static_cast<unsigned long long>(width) * height <= kMaxPixels;
+}
 //! 16-bit colour PNM files (rare): OpenCV's fixed-point BT.601 weights (cvtColor BGR2GRAY), (R, G, B) / 2^14.
 constexpr unsigned kGreyWeightR = 4899, kGreyWeightG = 9617, kGreyWeightB = 1868, kGreyShift = 14;
 
@@ -83,8 +93,7 @@ bool decodeJpeg(const unsigned char *data, std::size_t size, vpImage<unsigned ch
   cinfo.out_color_space = JCS_GRAYSCALE;
   cinfo.out_color_components = 1;
   jpeg_start_decompress(&cinfo);
-  if (cinfo.output_width == 0 || cinfo.output_height == 0 || cinfo.output_width > kMaxSide ||
-      cinfo.output_height > kMaxSide) {
+  if (!imageSizeAccepted(cinfo.output_width, cinfo.output_height)) {
     copyMessage(message, "bad image size in the JPEG header");
     jpeg_destroy_decompress(&cinfo);
     return false;
@@ -159,7 +168,7 @@ bool decodePng(const unsigned char *data, std::size_t size, vpImage<unsigned cha
   png_uint_32 w = 0, h = 0;
   int depth = 0, colorType = 0;
   png_get_IHDR(png, info, &w, &h, &depth, &colorType, nullptr, nullptr, nullptr);
-  if (w == 0 || h == 0 || w > kMaxSide || h > kMaxSide) {
+  if (!imageSizeAccepted(w, h)) {
     png_error(png, "bad image size in the PNG header");
   }
   const bool keep16 = out16 != nullptr && depth == 16;
@@ -272,12 +281,20 @@ void decodePnm(const unsigned char *data, std::size_t size, const std::string &n
   if (!in.number(w) || !in.number(h) || !in.number(maxval)) {
     fail(name, "bad PGM/PPM header");
   }
-  if (w == 0 || h == 0 || w > kMaxSide || h > kMaxSide || maxval == 0 || maxval > 65535) {
+  if (!imageSizeAccepted(w, h) || maxval == 0 || maxval > 65535) {
     fail(name, "bad PGM/PPM header (size or maximum value out of range)");
   }
   const int channels = colour ? 3 : 1;
   const int bytesPerSample = maxval > 255 ? 2 : 1;
   const std::size_t count = static_cast<std::size_t>(w) * h * static_cast<std::size_t>(channels);
+  // The data must be able to hold the samples before they are allocated: a plain sample takes at least a digit and a
+  // separator (the last one no separator), a binary one its bytes after the single whitespace that ends the header.
+  const std::size_t left = in.pos < size ? size - in.pos : 0;
+  const bool fits =
+      plain ? count <= (left + 1) / 2 : left > 0 && (left - 1) / static_cast<std::size_t>(bytesPerSample) >= count;
+  if (!fits) {
+    fail(name, "the PGM/PPM data ends early (truncated file, or a header whose size is wrong)");
+  }
   std::vector<std::uint16_t> raw(count);
   if (plain) {
     for (std::size_t i = 0; i < count; ++i) {
@@ -288,10 +305,7 @@ void decodePnm(const unsigned char *data, std::size_t size, const std::string &n
       raw[i] = static_cast<std::uint16_t>(v);
     }
   } else {
-    ++in.pos; // exactly one whitespace character after the maximum value
-    if (in.pos > size || (size - in.pos) / static_cast<std::size_t>(bytesPerSample) < count) {
-      fail(name, "the PGM/PPM data ends early (truncated file)");
-    }
+    ++in.pos; // exactly one whitespace character after the maximum value (room checked above)
     const unsigned char *p = data + in.pos;
     for (std::size_t i = 0; i < count; ++i) {
       raw[i] = bytesPerSample == 1 ? p[i] : static_cast<std::uint16_t>((p[2 * i] << 8) | p[2 * i + 1]);
