@@ -3,6 +3,7 @@
 // inverse-depth interpolator.
 #include "HSlamTestData.h"
 
+#include "mapping/InitializationCheck.h"
 #include "mapping/MatchRefinement.h"
 #include "mapping/SparseIdepthInterpolator.h"
 #include "mapping/TwoViewGeometry.h"
@@ -433,6 +434,46 @@ TEST(TwoViewInitializer, SyntheticSceneExact)
               100. * median(relErr), 100. * coverage, queries);
   EXPECT_LT(median(relErr), 0.10);
   EXPECT_GT(coverage, 0.8);
+}
+
+// The second opinion on a young map (InitializationCheck.h): the true relative pose of two synthetic frames agrees with
+// their two-view geometry; a pose 3 degrees off in rotation, or 20 degrees off in translation direction, does not.
+TEST(InitializationCheck, TwoViewGeometryConfirmsTheTruePoseOnly)
+{
+  if (!syntheticSceneAvailable()) {
+    GTEST_SKIP() << "ViSP image data (visp-images-data) not found";
+  }
+  vpHSlamSyntheticScene scene;
+  scene.configure(320, 240, 300, 30.0, 1);
+  const PinholeIntrinsics K = intrinsicsOf(scene);
+  const vpHSlamParameters params;
+  Frame a, b;
+  a.id = 0;
+  scene.render(0, a.raw);
+  // The first frame whose geometry with frame 0 is well conditioned (the synthetic initialisation: frame 40 at most).
+  SE3d bMa;
+  TwoViewPoseCheck truth;
+  for (b.id = 10; b.id <= 60 && !truth.measured; b.id += 5) {
+    scene.render(static_cast<unsigned int>(b.id), b.raw);
+    bMa = toSE3(scene.getPose(static_cast<unsigned int>(b.id))).inverse() * toSE3(scene.getPose(0));
+    truth = checkPoseByTwoViews(params, K, a, b, bMa);
+  }
+  std::printf("[check] true pose, frame %d: measured %d, rotation %.3f deg, direction %.3f deg off\n", b.id - 5,
+              truth.measured, truth.rotationErrorDeg, truth.directionErrorDeg);
+  ASSERT_TRUE(truth.measured) << "outcome " << truth.outcome;
+  EXPECT_TRUE(truth.agrees);
+  const Eigen::Matrix3d tilt = Eigen::AngleAxisd(3. / kRadToDeg, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const SE3d rotated(tilt * bMa.rotationMatrix(), bMa.translation());
+  const TwoViewPoseCheck rotatedCheck = checkPoseByTwoViews(params, K, a, b, rotated);
+  EXPECT_TRUE(rotatedCheck.measured);
+  EXPECT_FALSE(rotatedCheck.agrees) << rotatedCheck.rotationErrorDeg;
+  const Eigen::Matrix3d swing = Eigen::AngleAxisd(20. / kRadToDeg, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const SE3d swung(bMa.rotationMatrix(), swing * bMa.translation());
+  const TwoViewPoseCheck swungCheck = checkPoseByTwoViews(params, K, a, b, swung);
+  EXPECT_TRUE(swungCheck.measured);
+  EXPECT_FALSE(swungCheck.agrees) << swungCheck.directionErrorDeg;
+  // Identical images: no geometry to measure, no opinion.
+  EXPECT_FALSE(checkPoseByTwoViews(params, K, a, a, bMa).measured);
 }
 
 TEST(TwoViewInitializer, StaticCameraNeverInitialises)

@@ -4,6 +4,7 @@
 #include "mapping/KeyframeWindow.h"
 
 #include "mapping/AnchorResidual.h"
+#include "mapping/InitializationCheck.h"
 #include "mapping/SparseIdepthInterpolator.h"
 #include "mapping/TwoViewInitializer.h"
 
@@ -289,6 +290,37 @@ bool KeyframeWindow::activateOnDepthPrior(const Keyframe &newest, const Keyframe
   return true;
 }
 
+bool KeyframeWindow::segmentMotionConfirmed() const
+{
+  // The segment's consecutive keyframe pairs, newest first; the frames of a pair far apart (KITTI every 4th frame:
+  // 8 frames) often share too few matches to be measured, so every pair of the young segment may give its opinion.
+  // Not the first pair: its motion is the initialisation's own two-view result.
+  const size_t inSegment = std::min(m_window.size(), static_cast<size_t>(std::max(m_keyframesInSegment, 0)));
+  int measured = 0;
+  for (size_t k = m_window.size() - 1; k + inSegment > m_window.size() + 1; --k) {
+    const Frame &a = *m_window[k - 1]->frame, &b = *m_window[k]->frame;
+    const TwoViewPoseCheck check = checkPoseByTwoViews(m_params, m_K0, a, b, b.cMw * a.cMw.inverse());
+    if (!check.measured) {
+      VP_HSLAM_LOG(vpHSlamLog::debug, "keyframes " << m_window[k - 1]->id() << "-" << m_window[k]->id()
+                                                   << ": two-view outcome " << check.outcome);
+      continue;
+    }
+    ++measured;
+    VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << m_window.back()->id() << ": residual above DSO's initialisation "
+                                                << "bound; keyframes " << m_window[k - 1]->id() << "-"
+                                                << m_window[k]->id() << ": two-view geometry " << check.rotationErrorDeg
+                                                << " deg in rotation and " << check.directionErrorDeg
+                                                << " deg in direction from the window's");
+    if (!check.agrees) {
+      return false;
+    }
+  }
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << m_window.back()->id() << ": " << measured
+                                              << " keyframe pairs measured by their two-view geometry"
+                                              << (measured > 0 ? ", all agree: the map is kept" : ""));
+  return measured > 0;
+}
+
 double KeyframeWindow::medianActiveIdepth() const
 {
   std::vector<double> idepths;
@@ -322,12 +354,13 @@ void KeyframeWindow::optimize(const Keyframe &kf, const GlobalMap &stored, const
                                               << " accepted), rmse " << rmse << ", " << summary.outlierPoints
                                               << " outlier points, " << anchorOutliers << " anchors dropped, "
                                               << summary.totalMs << " ms");
-  // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong.
+  // DSO makeKeyFrame: a high window RMSE on keyframes 2-4 means the initialisation was wrong, unless the segment's
+  // keyframe pairs' own two-view geometry confirms the window's motion (InitializationCheck.h says why).
   const int checked = m_keyframesInSegment - kFirstCheckedKeyframe;
   if (!m_relocalizedInSegment && checked >= 0 &&
       checked < static_cast<int>(sizeof(kInitRmseLimits) / sizeof(kInitRmseLimits[0])) &&
       rmse > initRmseLimit(kInitRmseLimits[checked], m_initNoiseSigma)) {
-    m_initializationFailed = true;
+    m_initializationFailed = !segmentMotionConfirmed();
   }
   m_pendingPairs.clear();
   if (keepPairs) {

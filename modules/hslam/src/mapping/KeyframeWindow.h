@@ -122,6 +122,11 @@ private:
   //! Median inverse depth of the window's active points (each in its host), 0 when there is none.
   double medianActiveIdepth() const;
   /*!
+    Whether the two-view geometry of the segment's consecutive keyframe pairs confirms the window's motion: at least
+    one pair measured, and every measured pair agrees (InitializationCheck.h).
+  */
+  bool segmentMotionConfirmed() const;
+  /*!
     Turning in place: candidate \e c of \e host, refused by the Hessian test, is kept on a weak prior at
     \e medianIdepth (clamped into its interval) when the translation from \e host to \e newest moves that depth by
     less than mapper.rotationFlowPx and its residuals agree. Then \e r, \e priorIdepth and \e priorWeight (1 /

@@ -3,6 +3,7 @@
  */
 #include "mapping/TwoViewInitializer.h"
 
+#include "mapping/EpipolarMatching.h"
 #include "mapping/TwoViewGeometry.h"
 
 #include <visp3/hslam/vpHSlamException.h>
@@ -56,6 +57,12 @@ constexpr double kRefineHuberFactor = 2.;
 constexpr double kMaxRefinementShiftPx = 3.;
 //! minMatches must at least allow the 8-point homography / fundamental estimates to be over-determined.
 constexpr int kMinMatchesLowerBound = 8;
+/*!
+  Matches of a failed attempt that must agree on an essential matrix (and be at least half of them) before the
+  unmatched keypoints are searched along its epipolar lines: fewer, and a wrong matrix would recruit matches that
+  agree with it.
+*/
+constexpr int kMinSeedInliers = 20;
 //! OpenCV findHomography RANSAC iteration cap (its default).
 constexpr int kHomographyMaxIters = 2000;
 
@@ -164,6 +171,13 @@ const TwoViewInitialization &TwoViewInitializer::result() const
   return m_result;
 }
 
+OrbExtractorOptions twoViewOrbOptions(const vpHSlamParameters::Initializer &params)
+{
+  OrbExtractorOptions options;
+  options.maxFeatures = params.orbFeatures;
+  return options;
+}
+
 TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned char> &I, int frameId)
 {
   if (m_state == initialized) {
@@ -192,6 +206,17 @@ TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned ch
   attempt.numRefinedMatches =
       static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
   attempt.outcome = solve(matches, attempt);
+  // More matches help where waiting does not: matches only get fewer as the view moves on, while parallax grows (a
+  // low-parallax attempt waits for the next frame, as before; densifying it would start maps on shorter baselines).
+  const bool worthDensifying =
+      attempt.outcome == TwoViewAttempt::tooFewMatches || attempt.outcome == TwoViewAttempt::tooFewInliers;
+  if (worthDensifying && addEpipolarMatches(keypoints, descriptors, I, matches) > 0) {
+    attempt = TwoViewAttempt();
+    attempt.numMatches = static_cast<int>(matches.size());
+    attempt.numRefinedMatches =
+        static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
+    attempt.outcome = solve(matches, attempt);
+  }
   if (attempt.outcome == TwoViewAttempt::initialized) {
     m_result.firstFrameId = m_firstId;
     m_result.currentFrameId = frameId;
@@ -250,8 +275,55 @@ void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints
     m.p1 = cv::Point2d(a.x, a.y);
     m.p2 = cv::Point2d(b.x, b.y);
     m.firstIndex = j;
+    m.currentIndex = i;
     matches.push_back(m);
   }
+}
+
+int TwoViewInitializer::addEpipolarMatches(const std::vector<cv::KeyPoint> &keypoints, const cv::Mat &descriptors,
+                                           const vpImage<unsigned char> &I, std::vector<Match> &matches)
+{
+  if (static_cast<int>(matches.size()) < kMinSeedInliers) {
+    return 0;
+  }
+  std::vector<cv::Point2d> cv1, cv2;
+  for (const Match &m : matches) {
+    cv1.push_back(m.p1);
+    cv2.push_back(m.p2);
+  }
+  const Eigen::Matrix3d Keig = intrinsicsMatrix(m_K);
+  cv::Mat Kcv, inliers;
+  cv::eigen2cv(Keig, Kcv);
+  const cv::Mat Es =
+      cv::findEssentialMat(cv1, cv2, Kcv, cv::RANSAC, m_params.ransacConfidence, m_params.ransacThresholdPx, inliers);
+  const int agreeing = inliers.empty() ? 0 : cv::countNonZero(inliers);
+  if (Es.rows < 3 || agreeing < kMinSeedInliers || 2 * agreeing < static_cast<int>(matches.size())) {
+    return 0;
+  }
+  Eigen::Matrix3d E;
+  cv::cv2eigen(Es.rowRange(0, 3), E); // the first of the 5-point solver's solutions: RANSAC's best
+  const Eigen::Matrix3d Kinv = Keig.inverse();
+  const Eigen::Matrix3d F = Kinv.transpose() * E * Kinv;
+  std::vector<bool> firstUsed(m_firstKeypoints.size(), false), currentUsed(keypoints.size(), false);
+  for (const Match &m : matches) {
+    firstUsed[static_cast<size_t>(m.firstIndex)] = true;
+    currentUsed[static_cast<size_t>(m.currentIndex)] = true;
+  }
+  std::vector<Match> added;
+  for (const auto &pair : matchAlongEpipolarLines(F, m_firstKeypoints, m_firstDescriptors, keypoints, descriptors,
+                                                  firstUsed, currentUsed)) {
+    Match m;
+    const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(pair.first)].pt;
+    const cv::Point2f &b = keypoints[static_cast<size_t>(pair.second)].pt;
+    m.p1 = cv::Point2d(a.x, a.y);
+    m.p2 = cv::Point2d(b.x, b.y);
+    m.firstIndex = pair.first;
+    m.currentIndex = pair.second;
+    added.push_back(m);
+  }
+  refineMatches(I, added);
+  matches.insert(matches.end(), added.begin(), added.end());
+  return static_cast<int>(added.size());
 }
 
 void TwoViewInitializer::forgetTemplates()

@@ -18,19 +18,12 @@ constexpr double kMinBackfillInlierRatio = 0.75;
   trajectory's ATE 0.036 m instead of 0.010 m; on the shared real sequences the backfilled frames keep >= 98 %).
 */
 constexpr double kMinBackfillOverlap = 0.5;
-
-OrbExtractorOptions initializerOrbOptions(const vpHSlamParameters &params)
-{
-  OrbExtractorOptions options;
-  options.maxFeatures = params.initializer.orbFeatures;
-  return options;
-}
 } // namespace
 
 MonocularInitializer::MonocularInitializer(const vpHSlamParameters &params, const PinholeIntrinsics &K,
                                            bool photometricCalibration)
     : m_params(params), m_photometricCalibration(photometricCalibration),
-      m_initializer(params.initializer, K, initializerOrbOptions(params))
+      m_initializer(params.initializer, K, twoViewOrbOptions(params.initializer))
 {
 }
 
