@@ -292,30 +292,36 @@ bool KeyframeWindow::activateOnDepthPrior(const Keyframe &newest, const Keyframe
 
 bool KeyframeWindow::segmentMotionConfirmed() const
 {
-  // The segment's consecutive keyframe pairs, newest first; the frames of a pair far apart (KITTI every 4th frame:
-  // 8 frames) often share too few matches to be measured, so every pair of the young segment may give its opinion.
-  // Not the first pair: its motion is the initialisation's own two-view result.
+  // Every pair of the young segment's keyframes, newest first, may give its opinion: consecutive keyframes far apart
+  // (KITTI every 4th frame) often share too few matches, close ones (Tsukuba every 3rd frame) too little parallax.
+  // Not the first two keyframes together: their motion is the initialisation's own two-view result.
   const size_t inSegment = std::min(m_window.size(), static_cast<size_t>(std::max(m_keyframesInSegment, 0)));
+  const size_t first = m_window.size() - inSegment;
   int measured = 0;
-  for (size_t k = m_window.size() - 1; k + inSegment > m_window.size() + 1; --k) {
-    const Frame &a = *m_window[k - 1]->frame, &b = *m_window[k]->frame;
-    const TwoViewPoseCheck check = checkPoseByTwoViews(m_params, m_K0, a, b, b.cMw * a.cMw.inverse());
-    if (!check.measured) {
-      VP_HSLAM_LOG(vpHSlamLog::debug, "keyframes " << m_window[k - 1]->id() << "-" << m_window[k]->id()
-                                                   << ": two-view outcome " << check.outcome);
-      continue;
-    }
-    ++measured;
-    VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << m_window.back()->id() << ": residual above DSO's initialisation "
-                                                << "bound; keyframes " << m_window[k - 1]->id() << "-"
-                                                << m_window[k]->id() << ": two-view geometry " << check.rotationErrorDeg
-                                                << " deg in rotation and " << check.directionErrorDeg
-                                                << " deg in direction from the window's");
-    if (!check.agrees) {
-      return false;
+  for (size_t j = m_window.size() - 1; j > first; --j) {
+    for (size_t i = j; i-- > first;) {
+      if (i == first && j == first + 1) {
+        continue;
+      }
+      const Frame &a = *m_window[i]->frame, &b = *m_window[j]->frame;
+      const TwoViewPoseCheck check = checkPoseByTwoViews(m_params, m_K0, a, b, b.cMw * a.cMw.inverse());
+      if (!check.measured) {
+        VP_HSLAM_LOG(vpHSlamLog::debug, "keyframes " << m_window[i]->id() << "-" << m_window[j]->id()
+                                                     << ": not measured (two-view outcome " << check.outcome << ")");
+        continue;
+      }
+      ++measured;
+      VP_HSLAM_LOG(vpHSlamLog::debug, "keyframes " << m_window[i]->id() << "-" << m_window[j]->id()
+                                                   << ": two-view geometry " << check.rotationErrorDeg
+                                                   << " deg in rotation and " << check.directionErrorDeg
+                                                   << " deg in direction from the window's");
+      if (!check.agrees) {
+        return false;
+      }
     }
   }
-  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << m_window.back()->id() << ": " << measured
+  VP_HSLAM_LOG(vpHSlamLog::debug, "keyframe " << m_window.back()->id()
+                                              << ": residual above DSO's initialisation bound, " << measured
                                               << " keyframe pairs measured by their two-view geometry"
                                               << (measured > 0 ? ", all agree: the map is kept" : ""));
   return measured > 0;
