@@ -23,6 +23,10 @@
   5 is 11 degrees of rotation away from the geometry of its keyframes 1 and 3 (kept on purpose, it ends at 15.7 cm
   ATE instead of 0.20 cm). Below the bound nothing changes, and no image is matched.
 
+  Cost: two ORB extractions and a brute-force match per pair, only when the bound is exceeded (once per young map
+  that exceeds it): 64 ms for Tsukuba every 3rd frame (two pairs, 640x480), 289 ms for KITTI every 4th frame (five
+  pairs, 1226x370), in the mapping thread (2026-12-07, 2-core Xeon VM at 2.8 GHz).
+
   Stateless and thread-safe (each call makes its own initializer).
 */
 #ifndef HSLAM_MAPPING_INITIALIZATION_CHECK_H
