@@ -32,13 +32,68 @@ bool secondEpipole(const Eigen::Matrix3d &F, Eigen::Vector2d &e)
   e = best.head<2>() / best.z();
   return true;
 }
-} // namespace
 
-std::vector<std::pair<int, int>>
-matchAlongEpipolarLines(const Eigen::Matrix3d &F, const std::vector<cv::KeyPoint> &first,
-                        const cv::Mat &firstDescriptors, const std::vector<cv::KeyPoint> &second,
-                        const cv::Mat &secondDescriptors, std::vector<bool> &firstUsed, std::vector<bool> &secondUsed,
-                        const EpipolarMatchOptions &options)
+//! A first-view keypoint's best match on its epipolar line, with its Hamming distance.
+struct Candidate {
+  int distance, firstIndex, secondIndex;
+};
+
+//! What is fixed for one call: the second view's keypoints, descriptors and flags, the epipole and the options.
+struct SecondView {
+  const std::vector<cv::KeyPoint> &keypoints;
+  std::vector<OrbDescriptor> descriptors;
+  const std::vector<bool> &used;
+  bool hasEpipole;
+  Eigen::Vector2d epipole;
+  const EpipolarMatchOptions &options;
+};
+
+/*!
+  The closest free second-view keypoint to \e keypoint (descriptor \e d) within its epipolar band, when it passes
+  the distance and ratio tests.
+*/
+bool closestOnLine(const Eigen::Matrix3d &F, const cv::KeyPoint &keypoint, const OrbDescriptor &d, const SecondView &v,
+                   int &index, int &distance)
+{
+  const Eigen::Vector3d line = F * Eigen::Vector3d(keypoint.pt.x, keypoint.pt.y, 1.);
+  const double lineNorm = line.head<2>().norm();
+  if (!(lineNorm > 0.)) {
+    return false;
+  }
+  int best = std::numeric_limits<int>::max(), secondBest = best, bestIndex = -1;
+  for (size_t i = 0; i < v.keypoints.size(); ++i) {
+    const cv::KeyPoint &k = v.keypoints[i];
+    if (v.used[i] || std::abs(k.octave - keypoint.octave) > 1) {
+      continue;
+    }
+    const double levelScale = std::pow(v.options.levelScale, k.octave);
+    const Eigen::Vector2d x2(k.pt.x, k.pt.y);
+    if (std::abs(line.head<2>().dot(x2) + line.z()) / lineNorm > v.options.maxLineDistancePx * levelScale) {
+      continue;
+    }
+    if (v.hasEpipole && (x2 - v.epipole).norm() < v.options.minEpipoleDistancePx * levelScale) {
+      continue;
+    }
+    const int dist = hammingDistance(d, v.descriptors[i]);
+    if (dist < best) {
+      secondBest = best;
+      best = dist;
+      bestIndex = static_cast<int>(i);
+    } else if (dist < secondBest) {
+      secondBest = dist;
+    }
+  }
+  if (bestIndex < 0 || best > v.options.maxHamming || !(best < v.options.ratio * secondBest)) {
+    return false;
+  }
+  index = bestIndex;
+  distance = best;
+  return true;
+}
+
+void checkInputs(const std::vector<cv::KeyPoint> &first, const cv::Mat &firstDescriptors,
+                 const std::vector<cv::KeyPoint> &second, const cv::Mat &secondDescriptors,
+                 const std::vector<bool> &firstUsed, const std::vector<bool> &secondUsed)
 {
   for (const cv::Mat *d : {&firstDescriptors, &secondDescriptors}) {
     if (d->type() != CV_8U || (d->rows > 0 && d->cols != kOrbDescriptorBytes)) {
@@ -52,53 +107,32 @@ matchAlongEpipolarLines(const Eigen::Matrix3d &F, const std::vector<cv::KeyPoint
     throw vpHSlamException(vpHSlamException::invalidArgument,
                            "matchAlongEpipolarLines: keypoints, descriptors and flags differ in number");
   }
-  struct Candidate {
-    int distance, firstIndex, secondIndex;
-  };
-  std::vector<OrbDescriptor> secondSet(second.size());
+}
+} // namespace
+
+std::vector<std::pair<int, int>>
+matchAlongEpipolarLines(const Eigen::Matrix3d &F, const std::vector<cv::KeyPoint> &first,
+                        const cv::Mat &firstDescriptors, const std::vector<cv::KeyPoint> &second,
+                        const cv::Mat &secondDescriptors, std::vector<bool> &firstUsed, std::vector<bool> &secondUsed,
+                        const EpipolarMatchOptions &options)
+{
+  checkInputs(first, firstDescriptors, second, secondDescriptors, firstUsed, secondUsed);
+  SecondView view{second, std::vector<OrbDescriptor>(second.size()), secondUsed, false, Eigen::Vector2d::Zero(),
+                  options};
   for (size_t i = 0; i < second.size(); ++i) {
-    secondSet[i] = descriptorFromBytes(secondDescriptors.ptr<std::uint8_t>(static_cast<int>(i)));
+    view.descriptors[i] = descriptorFromBytes(secondDescriptors.ptr<std::uint8_t>(static_cast<int>(i)));
   }
+  view.hasEpipole = secondEpipole(F, view.epipole);
   std::vector<Candidate> candidates;
-  Eigen::Vector2d epipole = Eigen::Vector2d::Zero();
-  const bool hasEpipole = secondEpipole(F, epipole);
   for (size_t j = 0; j < first.size(); ++j) {
-    if (firstUsed[j]) {
-      continue;
-    }
-    const OrbDescriptor a = descriptorFromBytes(firstDescriptors.ptr<std::uint8_t>(static_cast<int>(j)));
-    const Eigen::Vector3d line = F * Eigen::Vector3d(first[j].pt.x, first[j].pt.y, 1.);
-    const double lineNorm = line.head<2>().norm();
-    if (!(lineNorm > 0.)) {
-      continue;
-    }
-    int best = std::numeric_limits<int>::max(), secondBest = best, bestIndex = -1;
-    for (size_t i = 0; i < second.size(); ++i) {
-      const cv::KeyPoint &k = second[i];
-      if (secondUsed[i] || std::abs(k.octave - first[j].octave) > 1) {
-        continue;
-      }
-      const double levelScale = std::pow(options.levelScale, k.octave);
-      const Eigen::Vector2d x2(k.pt.x, k.pt.y);
-      if (std::abs(line.head<2>().dot(x2) + line.z()) / lineNorm > options.maxLineDistancePx * levelScale) {
-        continue;
-      }
-      if (hasEpipole && (x2 - epipole).norm() < options.minEpipoleDistancePx * levelScale) {
-        continue;
-      }
-      const int d = hammingDistance(a, secondSet[i]);
-      if (d < best) {
-        secondBest = best;
-        best = d;
-        bestIndex = static_cast<int>(i);
-      } else if (d < secondBest) {
-        secondBest = d;
-      }
-    }
-    if (bestIndex >= 0 && best <= options.maxHamming && best < options.ratio * secondBest) {
-      candidates.push_back({best, static_cast<int>(j), bestIndex});
+    int index = -1, distance = 0;
+    if (!firstUsed[j] &&
+        closestOnLine(F, first[j], descriptorFromBytes(firstDescriptors.ptr<std::uint8_t>(static_cast<int>(j))), view,
+                      index, distance)) {
+      candidates.push_back({distance, static_cast<int>(j), index});
     }
   }
+  // Each second-view keypoint for its closest first-view keypoint (ties: the first in order).
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate &a, const Candidate &b) { return a.distance < b.distance; });
   std::vector<std::pair<int, int>> matches;

@@ -122,8 +122,8 @@ private:
   //! Median inverse depth of the window's active points (each in its host), 0 when there is none.
   double medianActiveIdepth() const;
   /*!
-    Whether the two-view geometry of the segment's consecutive keyframe pairs confirms the window's motion: at least
-    one pair measured, and every measured pair agrees (InitializationCheck.h).
+    Whether the two-view geometry of the segment's keyframe pairs (all but the first two together) confirms the
+    window's motion: at least one pair measured, and every measured pair agrees (InitializationCheck.h).
   */
   bool segmentMotionConfirmed() const;
   /*!

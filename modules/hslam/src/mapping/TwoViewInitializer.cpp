@@ -178,6 +178,16 @@ OrbExtractorOptions twoViewOrbOptions(const vpHSlamParameters::Initializer &para
   return options;
 }
 
+TwoViewAttempt TwoViewInitializer::attemptOn(const std::vector<Match> &matches)
+{
+  TwoViewAttempt attempt;
+  attempt.numMatches = static_cast<int>(matches.size());
+  attempt.numRefinedMatches =
+      static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
+  attempt.outcome = solve(matches, attempt);
+  return attempt;
+}
+
 TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned char> &I, int frameId)
 {
   if (m_state == initialized) {
@@ -201,21 +211,13 @@ TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned ch
   refineMatches(I, matches);
   ++m_framesSinceFirst;
 
-  TwoViewAttempt attempt;
-  attempt.numMatches = static_cast<int>(matches.size());
-  attempt.numRefinedMatches =
-      static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
-  attempt.outcome = solve(matches, attempt);
+  TwoViewAttempt attempt = attemptOn(matches);
   // More matches help where waiting does not: matches only get fewer as the view moves on, while parallax grows (a
   // low-parallax attempt waits for the next frame, as before; densifying it would start maps on shorter baselines).
   const bool worthDensifying =
       attempt.outcome == TwoViewAttempt::tooFewMatches || attempt.outcome == TwoViewAttempt::tooFewInliers;
   if (worthDensifying && addEpipolarMatches(keypoints, descriptors, I, matches) > 0) {
-    attempt = TwoViewAttempt();
-    attempt.numMatches = static_cast<int>(matches.size());
-    attempt.numRefinedMatches =
-        static_cast<int>(std::count_if(matches.begin(), matches.end(), [](const Match &m) { return m.refined; }));
-    attempt.outcome = solve(matches, attempt);
+    attempt = attemptOn(matches);
   }
   if (attempt.outcome == TwoViewAttempt::initialized) {
     m_result.firstFrameId = m_firstId;
@@ -232,6 +234,19 @@ TwoViewInitializer::State TwoViewInitializer::addFrame(const vpImage<unsigned ch
   }
   m_lastAttempt = attempt;
   return m_state;
+}
+
+TwoViewInitializer::Match TwoViewInitializer::matchOf(int firstIndex, int currentIndex,
+                                                      const std::vector<cv::KeyPoint> &keypoints) const
+{
+  const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(firstIndex)].pt;
+  const cv::Point2f &b = keypoints[static_cast<size_t>(currentIndex)].pt;
+  Match m;
+  m.p1 = cv::Point2d(a.x, a.y);
+  m.p2 = cv::Point2d(b.x, b.y);
+  m.firstIndex = firstIndex;
+  m.currentIndex = currentIndex;
+  return m;
 }
 
 void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints, const cv::Mat &descriptors,
@@ -269,14 +284,7 @@ void TwoViewInitializer::matchToFirst(const std::vector<cv::KeyPoint> &keypoints
     if (bestCurOfFirst[static_cast<size_t>(j)] != i) {
       continue;
     }
-    const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(j)].pt;
-    const cv::Point2f &b = keypoints[static_cast<size_t>(i)].pt;
-    Match m;
-    m.p1 = cv::Point2d(a.x, a.y);
-    m.p2 = cv::Point2d(b.x, b.y);
-    m.firstIndex = j;
-    m.currentIndex = i;
-    matches.push_back(m);
+    matches.push_back(matchOf(j, i, keypoints));
   }
 }
 
@@ -312,14 +320,7 @@ int TwoViewInitializer::addEpipolarMatches(const std::vector<cv::KeyPoint> &keyp
   std::vector<Match> added;
   for (const auto &pair : matchAlongEpipolarLines(F, m_firstKeypoints, m_firstDescriptors, keypoints, descriptors,
                                                   firstUsed, currentUsed)) {
-    Match m;
-    const cv::Point2f &a = m_firstKeypoints[static_cast<size_t>(pair.first)].pt;
-    const cv::Point2f &b = keypoints[static_cast<size_t>(pair.second)].pt;
-    m.p1 = cv::Point2d(a.x, a.y);
-    m.p2 = cv::Point2d(b.x, b.y);
-    m.firstIndex = pair.first;
-    m.currentIndex = pair.second;
-    added.push_back(m);
+    added.push_back(matchOf(pair.first, pair.second, keypoints));
   }
   refineMatches(I, added);
   matches.insert(matches.end(), added.begin(), added.end());

@@ -27,7 +27,7 @@
     lines (EpipolarMatching.h: the ratio test among a line's few candidates instead of the whole image), refined
     the same way, and the attempt is made again on all matches. Measured on KITTI 06 every 4th frame (4 m between
     frames): the brute-force pass finds 30-70 matches and the first map waited until the 10th frame; see
-    docs/initialisation.md.
+    docs/hybrid-tracking.md (Decisions).
   - An essential matrix (cv::findEssentialMat, RANSAC) and a homography (cv::findHomography, RANSAC) are both
     fitted and scored with ORB-SLAM2's truncated chi-square scores on all matches; R_H = S_H / (S_H + S_F) above
     kHomographyScoreRatio selects the homography (planar or low-parallax scene), else the essential matrix.
@@ -164,6 +164,8 @@ private:
     int currentIndex = -1; //!< keypoint index in the current frame
     bool refined = false;
   };
+  //! First-frame keypoint \e firstIndex paired with current keypoint \e currentIndex of \e keypoints.
+  Match matchOf(int firstIndex, int currentIndex, const std::vector<cv::KeyPoint> &keypoints) const;
   void matchToFirst(const std::vector<cv::KeyPoint> &keypoints, const cv::Mat &descriptors,
                     std::vector<Match> &matches) const;
   void refineMatches(const vpImage<unsigned char> &I, std::vector<Match> &matches);
@@ -176,6 +178,8 @@ private:
   //! A new first frame: its keypoints' refinement templates are made again, when first needed.
   void forgetTemplates();
   TwoViewAttempt::Outcome solve(const std::vector<Match> &matches, TwoViewAttempt &attempt);
+  //! One attempt on \e matches: their counts and solve()'s outcome.
+  TwoViewAttempt attemptOn(const std::vector<Match> &matches);
 
   vpHSlamParameters::Initializer m_params;
   PinholeIntrinsics m_K;
