@@ -1,7 +1,10 @@
 // Loop verification and correction building blocks (issue 10): Horn's closed-form Sim(3), RANSAC with two-way
-// reprojection and refinement, and the Sim(3) pose graph on a drifted loop.
+// reprojection and refinement, the Sim(3) pose graph on a drifted loop, and the loop correction's graph (the loops
+// it keeps).
+#include "loop/LoopCorrection.h"
 #include "loop/PoseGraph.h"
 #include "loop/Sim3Solver.h"
+#include "map/GlobalMap.h"
 
 #include "HSlamTestCameras.h"
 
@@ -9,6 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <random>
 #include <vector>
@@ -282,6 +286,81 @@ TEST(PoseGraph, SparseSolverReachesCeresSolution)
     EXPECT_LT(transformError(sparse.vertex(k), ceres.vertex(k)), 1e-4) << "vertex " << k;
     EXPECT_EQ(automatic.vertex(k).matrix(), ceres.vertex(k).matrix()) << "vertex " << k;
   }
+}
+//! Camera \e k of a run round a circle of radius 2 (a lap every 20 keyframes), looking outward, drifting along z.
+hslam::SE3d circleCamera(int k, double drift)
+{
+  const double a = 2. * M_PI * k / 20.;
+  const Eigen::Quaterniond q(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()));
+  const Eigen::Vector3d centre(2. * std::cos(a), 0., 2. * std::sin(a) + drift * k);
+  return hslam::SE3d(q, -(q * centre)); // cMw
+}
+
+//! How far the map's relative pose of keyframes \e a and \e b is from the truth's (norm of the SE(3) log).
+double relativeError(const hslam::GlobalMap &map, int a, int b)
+{
+  const hslam::SE3d estimated = map.find(a)->cMw * map.find(b)->cMw.inverse();
+  const hslam::SE3d truth = circleCamera(a, 0.) * circleCamera(b, 0.).inverse();
+  return (estimated * truth.inverse()).log().norm();
+}
+
+TEST(LoopCorrection, EachLoopIsKeptAsOneEdgeThatStillHoldsAtTheNextCorrection)
+{
+  // Two laps of 20 keyframes whose odometry drifts, the last 3 in the window. A loop is one measured similarity: the
+  // graph of later corrections keeps one edge for it (not one per pair of its two sides' keyframes, which made the
+  // graph of a long run fill in), and that edge, weighted as the loop's edges were, must still hold the first loop
+  // closed when a second one is corrected.
+  constexpr int kStored = 40, kWindow = 3;
+  constexpr double kDrift = 3e-3;
+  hslam::GlobalMap map;
+  std::map<int, hslam::SE3d> window;
+  for (int k = 0; k < kStored + kWindow; ++k) {
+    if (k < kStored) {
+      hslam::GlobalKeyframe g;
+      g.id = k;
+      g.cMw = circleCamera(k, kDrift);
+      map.add(g); // (returns whether it culled a keyframe: no points here, none)
+    } else {
+      window[k] = circleCamera(k, kDrift);
+    }
+    if (k > 0) {
+      hslam::PosePoseEdge e;
+      e.from = k - 1;
+      e.to = k;
+      e.toMfrom = circleCamera(k, kDrift) * circleCamera(k - 1, kDrift).inverse();
+      map.addPosePoseEdge(e);
+    }
+  }
+  auto correct = [&](int keyframe, int candidate, std::vector<hslam::PoseGraphEdge> &constraints) {
+    hslam::DetectedLoop loop;
+    loop.keyframe = keyframe;
+    loop.candidate = candidate;
+    loop.SkeyframeCandidate = Sim3d(circleCamera(keyframe, 0.) * circleCamera(candidate, 0.).inverse(), 1.);
+    std::vector<std::pair<int, Sim3d>> solution;
+    if (!hslam::solveLoopCorrection(map, 0, window, constraints, loop, solution)) {
+      return false;
+    }
+    for (const auto &s : solution) {
+      map.applySimilarity(s.first, s.second);
+    }
+    return true;
+  };
+  std::vector<hslam::PoseGraphEdge> constraints;
+  const double before = relativeError(map, 39, 19);
+  ASSERT_TRUE(correct(39, 19, constraints));
+  const double corrected = relativeError(map, 39, 19);
+  ASSERT_EQ(constraints.size(), 1u);
+  EXPECT_EQ(constraints[0].i, 19);
+  EXPECT_EQ(constraints[0].j, 39);
+  EXPECT_GT(constraints[0].sqrtInformation(0, 0), 1.); // as strong as the loop's edges together
+  ASSERT_TRUE(correct(30, 10, constraints));
+  ASSERT_EQ(constraints.size(), 2u);
+  const double after = relativeError(map, 39, 19);
+  std::printf("loop 39-19: error %.4f before, %.4f corrected, %.4f after the loop 30-10 (which: %.4f)\n", before,
+              corrected, after, relativeError(map, 30, 10));
+  EXPECT_LT(corrected, 0.1 * before);
+  EXPECT_LT(after, 0.1 * before);
+  EXPECT_LT(relativeError(map, 30, 10), 0.1 * before);
 }
 } // namespace
 
