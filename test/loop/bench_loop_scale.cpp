@@ -11,6 +11,8 @@
 #include "loop/KeyframeDatabase.h"
 #include "loop/LoopCorrection.h"
 
+#include "CircleRun.h"
+
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -101,13 +103,10 @@ void BM_LoopQuery(benchmark::State &state)
 }
 BENCHMARK(BM_LoopQuery)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond);
 
-//! Camera \e k of a run round a circle of radius 2 (a lap every kPlacesPerLap keyframes), looking outward.
+//! Camera \e k of a run round a circle (a lap every kPlacesPerLap keyframes).
 hslam::SE3d cameraPose(int k, double drift)
 {
-  const double a = 2. * M_PI * k / kPlacesPerLap;
-  const Eigen::Quaterniond q(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()));
-  const Eigen::Vector3d centre(2. * std::cos(a), 0., 2. * std::sin(a) + drift * k);
-  return hslam::SE3d(q, -(q * centre)); // cMw
+  return hslam_test::circleCamera(k, kPlacesPerLap, drift);
 }
 
 void BM_LoopCorrection(benchmark::State &state)

@@ -6,6 +6,7 @@
 #include "loop/Sim3Solver.h"
 #include "map/GlobalMap.h"
 
+#include "CircleRun.h"
 #include "HSlamTestCameras.h"
 
 #include <gtest/gtest.h>
@@ -287,13 +288,10 @@ TEST(PoseGraph, SparseSolverReachesCeresSolution)
     EXPECT_EQ(automatic.vertex(k).matrix(), ceres.vertex(k).matrix()) << "vertex " << k;
   }
 }
-//! Camera \e k of a run round a circle of radius 2 (a lap every 20 keyframes), looking outward, drifting along z.
+//! Camera \e k of a run round a circle, a lap every 20 keyframes (CircleRun.h).
 hslam::SE3d circleCamera(int k, double drift)
 {
-  const double a = 2. * M_PI * k / 20.;
-  const Eigen::Quaterniond q(Eigen::AngleAxisd(-a, Eigen::Vector3d::UnitY()));
-  const Eigen::Vector3d centre(2. * std::cos(a), 0., 2. * std::sin(a) + drift * k);
-  return hslam::SE3d(q, -(q * centre)); // cMw
+  return hslam_test::circleCamera(k, 20, drift);
 }
 
 //! How far the map's relative pose of keyframes \e a and \e b is from the truth's (norm of the SE(3) log).
