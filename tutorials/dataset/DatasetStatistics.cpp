@@ -46,6 +46,7 @@ void writeLoopAndTagFields(std::ostream &out, const vpHSlam::Statistics &s, cons
       << "  \"loop_correction_ms_max\": " << jsonNumber(s.loopCorrectionMsMax) << ",\n"
       << "  \"loop_detection_ms_mean\": " << jsonNumber(s.loopDetectionMsMean) << ",\n"
       << "  \"loop_verification_ms_max\": " << jsonNumber(s.loopVerificationMsMax) << ",\n"
+      << "  \"loop_verification_ms_mean\": " << jsonNumber(s.loopVerificationMsMean) << ",\n"
       << "  \"global_ba_started\": " << s.globalBundleAdjustments << ",\n"
       << "  \"global_ba_applied\": " << s.globalBundleAdjustmentsApplied << ",\n"
       << "  \"global_ba_s_max\": " << jsonNumber(s.globalBundleAdjustmentSecondsMax) << ",\n"

@@ -86,13 +86,14 @@ struct LoopApplyStatistics {
 
 //! Counters of loop closure since the start.
 struct LoopStatistics {
-  int candidatesVerified = 0;    //!< consistent candidates given to the Sim(3) verification
-  std::vector<LoopRecord> loops; //!< loops accepted
-  int refusedImplausible = 0;    //!< verified loops refused for a rotation correction above the limit
-  int detections = 0;            //!< keyframes checked for a loop (database queried)
-  double detectionMsTotal = 0.;  //!< their wall time: query, consistency, verification (correction excluded)
-  double verificationMsMax = 0.; //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
-  LoopApplyStatistics applied;   //!< what the mapper applied
+  int candidatesVerified = 0;      //!< consistent candidates given to the Sim(3) verification
+  std::vector<LoopRecord> loops;   //!< loops accepted
+  int refusedImplausible = 0;      //!< verified loops refused for a rotation correction above the limit
+  int detections = 0;              //!< keyframes checked for a loop (database queried)
+  double detectionMsTotal = 0.;    //!< their wall time: query, consistency, verification (correction excluded)
+  double verificationMsMax = 0.;   //!< longest verification of one candidate (matching, Sim(3) RANSAC, refinement)
+  double verificationMsTotal = 0.; //!< of detectionMsTotal, the verifications' wall time (the rest: the query)
+  LoopApplyStatistics applied;     //!< what the mapper applied
 };
 
 //! A loop that detect() accepted.

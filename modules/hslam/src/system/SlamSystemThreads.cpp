@@ -376,6 +376,7 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.loopDetectionMsMean = loops.detections > 0 ? loops.detectionMsTotal / loops.detections : 0.;
   s.loopDetections = static_cast<unsigned int>(loops.detections);
   s.loopVerificationMsMax = loops.verificationMsMax;
+  s.loopVerificationMsMean = loops.detections > 0 ? loops.verificationMsTotal / loops.detections : 0.;
   s.globalBundleAdjustments = static_cast<unsigned int>(loops.applied.globalBaStarted);
   s.globalBundleAdjustmentsApplied = static_cast<unsigned int>(loops.applied.globalBaApplied);
   s.globalBundleAdjustmentSecondsMax = loops.applied.globalBaSecondsMax;

@@ -163,7 +163,8 @@ public:
     double loopDetectionMsMean = 0.;             //!< slam mode: loop detection per keyframe (query, verification), ms
     unsigned int loopDetections = 0;             //!< slam mode: keyframes that went through loop detection
     double loopVerificationMsMax = 0.;           //!< slam mode: longest verification of a candidate (Sim(3)), ms
-    unsigned int globalBundleAdjustments = 0;    //!< slam mode: global bundle adjustments started (one per correction)
+    double loopVerificationMsMean = 0.;       //!< slam mode: of loopDetectionMsMean, the verification of candidates, ms
+    unsigned int globalBundleAdjustments = 0; //!< slam mode: global bundle adjustments started (one per correction)
     unsigned int globalBundleAdjustmentsApplied = 0; //!< ... written back (not stopped by a newer loop, usable)
     double globalBundleAdjustmentSecondsMax = 0.;    //!< the longest of them, wall time, seconds
     double globalBundleAdjustmentRmsBeforePx = 0.;   //!< reprojection RMS of the last one applied, before, pixels
