@@ -67,6 +67,8 @@ TEST(SystemLoop, OutwardLoopIsClosedAndBeatsOdometry)
     if (s.loopsCorrected >= 1) { // the stage timings are filled in when a loop went through every stage
       EXPECT_GT(s.loopDetectionMsMean, 0.);
       EXPECT_GT(s.loopVerificationMsMax, 0.);
+      EXPECT_GT(s.loopVerificationMsMean, 0.); // a part of detection, spread over every keyframe queried
+      EXPECT_LE(s.loopVerificationMsMean, s.loopDetectionMsMean);
       EXPECT_GE(s.loopCorrectionMsMax, s.lastLoopCorrectionMs);
       EXPECT_GT(s.lastLoopCorrectionMs, 0.);
       EXPECT_EQ(s.globalBundleAdjustments, 0u); // off by default (docs/global-map-and-loops.md)

@@ -9,10 +9,10 @@
   (fixed: the window's priors tie them, and they hold the gauge). Edges, weighted alike: pose-pose edges between
   stored keyframes or a stored and a window keyframe (as the window measured them), strong co-visibility
   (kEssentialCovisibility shared points, at today's relative poses), one edge for each loop corrected before (its
-  measured similarity, an ordinary edge), and the new loop's connections: each
-  keyframe of the querying side (the keyframe that closed the loop and the window) to the candidate and its best
-  co-visible keyframes, through the measured similarity and each side's current relative poses, so that one edge does
-  not have to bend the whole chain alone.
+  measured similarity, an ordinary edge), and the new loop's connections: each keyframe of the querying side (the
+  keyframe that closed the loop and the window) to the candidate and its best co-visible keyframes, through the
+  measured similarity and each side's current relative poses, so that one edge does not have to bend the whole chain
+  alone.
 
   Threading: a pure function of its inputs.
 */
