@@ -95,12 +95,10 @@ int main(int argc, char **argv)
       params.features.desiredImmatureDensity = static_cast<int>(o.budget);
     }
     vpHSlam slam(hslam_test::syntheticCamera(scene), params);
-    std::cout
-        << "# " << o.width << "x" << o.height << ", re-use " << (o.reuse ? "on" : "off") << ", budget "
-        << params.features.desiredImmatureDensity << "\n"
-        << "# frame stored_keyframes segments detection_ms_mean_since_last verification_ms_mean_since_last corrections "
-           "last_correction_ms "
-           "last_correction_at_keyframes peak_rss_mb ate_m\n";
+    std::cout << "# " << o.width << "x" << o.height << ", re-use " << (o.reuse ? "on" : "off") << ", budget "
+              << params.features.desiredImmatureDensity << "\n"
+              << "# frame stored_keyframes segments detection_ms_mean_since_last verification_ms_mean_since_last "
+                 "corrections last_correction_ms last_correction_at_keyframes peak_rss_mb ate_m\n";
     vpImage<unsigned char> I;
     unsigned int nextReport = o.report, correctionsSeen = 0, correctionAt = 0;
     double detectionTotal = 0., verificationTotal = 0.;

@@ -350,7 +350,7 @@ TEST(LoopCorrection, EachLoopIsKeptAsOneEdgeThatStillHoldsAtTheNextCorrection)
   ASSERT_EQ(constraints.size(), 1u);
   EXPECT_EQ(constraints[0].i, 19);
   EXPECT_EQ(constraints[0].j, 39);
-  EXPECT_TRUE(constraints[0].sqrtInformation.isIdentity()); // an ordinary edge (LoopCorrection.cpp, keptEdge)
+  EXPECT_TRUE(constraints[0].sqrtInformation.isIdentity()); // an ordinary edge (solveLoopCorrection)
   ASSERT_TRUE(correct(30, 10, constraints));
   ASSERT_EQ(constraints.size(), 2u);
   const double after = relativeError(map, 39, 19);

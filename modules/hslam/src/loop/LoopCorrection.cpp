@@ -44,23 +44,6 @@ PoseGraphEdge edge(int i, int j, const Sim3d &Sji)
   return e;
 }
 
-/*!
-  What later corrections keep of a loop: the measured similarity between its two keyframes (the first of \e added,
-  candidate to querying keyframe), weighted as any other edge. The other edges are that measurement carried to the
-  neighbours through relative poses the graph holds anyway (pose-pose edges, co-visibility). Keeping all of them
-  (8 x 6 a loop) gave a long run about 12 edges a keyframe and a factorisation that filled in, and their weight
-  together on every later correction tore the loops' keyframes from their neighbours. The same weight on the one
-  edge did it too: the candidate's similarity followed the loop's measured scale while its neighbours followed the
-  chain, so its points and the frames tracked against it were rescaled apart from the rest, the next loops measured
-  scales of 0.5-1.8 (then 0.01-36 with all 48 edges), and the ATE of hslam_many_laps went from 3-7 cm to 0.5 m by
-  950 stored keyframes. As one ordinary edge, the loops' measured scales stayed within 0.96-1.04 and the ATE at
-  2.4-4.5 cm to 811 keyframes (docs/global-map-and-loops.md).
-*/
-PoseGraphEdge keptEdge(const std::vector<PoseGraphEdge> &added)
-{
-  return added.front();
-}
-
 //! Pose of keyframe \e id, stored or in the window.
 SE3d poseOf(const GlobalMap &map, const std::map<int, SE3d> &windowPoses, int id)
 {
@@ -85,7 +68,7 @@ bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, 
     return inGraph(a) && inGraph(b) && !(windowPoses.count(a) && windowPoses.count(b));
   };
   // Pose-pose edges as the window measured them (the relative pose of its last linearisation), strong co-visibility at
-  // today's relative poses. Every loop corrected so far is in the graph again (one edge each, keptEdge()), so each
+  // today's relative poses. Every loop corrected so far is in the graph again (one edge each, kept at the end), so each
   // correction is the batch solution of the window's measurements and all loops. At today's poses instead, an early
   // correction stayed baked into the chain: on the synthetic outward loop the median ATE over five budgets rose from
   // 0.016 to 0.023 m (on the real sequences played there and back the two were within 5 %, either way).
@@ -137,7 +120,16 @@ bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, 
     }
     solution.emplace_back(id, S);
   }
-  constraints.push_back(keptEdge(added));
+  // What later corrections keep of this loop: its measured similarity between its two keyframes (the first of
+  // `added`, candidate to querying keyframe), as an ordinary edge. The rest of `added` is that measurement carried
+  // to the neighbours through relative poses the graph holds anyway. Keeping all of them (8 x 6 a loop) filled the
+  // factorisation of a long run in, and their weight together on every later correction tore the loops' keyframes
+  // from their neighbours; the same weight on the one edge did it too: the candidate's similarity followed the loop's
+  // measured scale while its neighbours followed the chain, so its points and the frames tracked against it were
+  // rescaled apart from the rest, the next loops measured scales of 0.5-1.8 (0.01-36 with all 48 edges), and the ATE
+  // of hslam_many_laps went from 3-7 cm to 0.5 m by 950 stored keyframes. As one ordinary edge the loops' scales
+  // stayed within 0.96-1.04 and the ATE at 2.4-4.5 cm to 811 keyframes (docs/global-map-and-loops.md).
+  constraints.push_back(added.front());
   VP_HSLAM_LOG(vpHSlamLog::info, "loop " << loop.keyframe << "-" << loop.candidate << ": pose graph "
                                          << graph.vertexCount() << " vertices, " << graph.edgeCount() << " edges, "
                                          << summary.iterations << " iterations, cost " << summary.initialCost << " -> "
