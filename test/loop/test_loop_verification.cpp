@@ -145,4 +145,29 @@ TEST(LoopVerification, NeedsTheTwoEndsThemselves)
   EXPECT_LE(v.centralInliers, 10);
   EXPECT_FALSE(v.estimate.success);
 }
+
+TEST(LoopVerification, GuidedMatchingFindsByProjectionWhatTheDescriptorsLeftAmbiguous)
+{
+  // 60 shared points; 36 of them have a look-alike elsewhere in the query (2 bits from the right corner), so the
+  // ratio test leaves 24 descriptor matches, under minInliers (40). Guided matching finds the 36 where the
+  // similarity projects them. A query point just in front of the camera projects 10^11 pixels away: ignored.
+  Pair p = makePair(60, 0, 20, 7);
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> xy(-1.5, 1.5);
+  for (size_t i = 24; i < 60; ++i) {
+    p.query.X.push_back(Eigen::Vector3f(static_cast<float>(xy(rng)), static_cast<float>(xy(rng)), 4.f));
+    p.query.orb.push_back(noisy(p.query.orb[i], 2, rng));
+    p.query.octave.push_back(0);
+  }
+  p.query.X.push_back(Eigen::Vector3f(1.f, 1.f, 1e-8f));
+  p.query.orb.push_back(randomDescriptor(rng));
+  p.query.octave.push_back(0);
+  const hslam::LoopVerification v =
+      hslam::verifyLoopSides({{&p.query, SE3d()}}, {{&p.candidate, SE3d()}}, K, hslam::LoopVerificationOptions());
+  EXPECT_LE(v.matches, 30);
+  EXPECT_GE(v.guidedMatches, 30);
+  ASSERT_TRUE(v.estimate.success);
+  EXPECT_GE(v.estimate.inlierCount, 55);
+  EXPECT_NEAR(v.estimate.S21.scale(), 0.8, 1e-3);
+}
 } // namespace

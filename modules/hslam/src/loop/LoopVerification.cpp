@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
+#include <tuple>
 
 namespace hslam
 {
@@ -91,8 +93,56 @@ std::vector<std::pair<int, int>> matchSides(const std::vector<std::vector<LoopPo
   return out;
 }
 
+/*!
+  Side A's points by square cell of the largest search radius, so that a projection's candidates are those of the
+  3 x 3 cells around it (guided matching compared every B point with every A point: most of a verification's
+  time). The cells are sorted keys, not an array: a point just in front of a camera projects arbitrarily far.
+*/
+class PixelGrid
+{
+public:
+  PixelGrid(const std::vector<LoopPoint> &points, double cellPx) : m_cell(cellPx)
+  {
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (points[i].uv.allFinite()) {
+        m_entries.push_back({cellOf(points[i].uv.y()), cellOf(points[i].uv.x()), static_cast<int>(i)});
+      }
+    }
+    std::sort(m_entries.begin(), m_entries.end());
+  }
+  //! Calls \e f(i) for the points of the cells around \e uv (a superset of those within one cell of it).
+  template <class F> void forEachNear(const Eigen::Vector2d &uv, F f) const
+  {
+    if (!uv.allFinite()) {
+      return;
+    }
+    const std::int64_t row = cellOf(uv.y()), col = cellOf(uv.x());
+    for (std::int64_t r = row - 1; r <= row + 1; ++r) {
+      auto it = std::lower_bound(m_entries.begin(), m_entries.end(), Entry{r, col - 1, -1});
+      for (; it != m_entries.end() && it->row == r && it->col <= col + 1; ++it) {
+        f(it->index);
+      }
+    }
+  }
+
+private:
+  struct Entry {
+    std::int64_t row, col;
+    int index;
+    bool operator<(const Entry &o) const { return std::tie(row, col, index) < std::tie(o.row, o.col, o.index); }
+  };
+  std::int64_t cellOf(double px) const
+  {
+    constexpr double kFar = 1e12; // cells beyond this are one cell: nothing projects there usefully
+    return static_cast<std::int64_t>(std::floor(std::clamp(px / m_cell, -kFar, kFar)));
+  }
+  double m_cell;
+  std::vector<Entry> m_entries;
+};
+
 //! Step 3: B points mapped by S21 into A's camera, each paired with the closest unmatched A point in descriptor
-//! within the radius of its projection (and in front). Appends to \e pairs; returns how many were added.
+//! within the radius of its projection (and in front; the lowest index among equals). Appends to \e pairs;
+//! returns how many were added.
 int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<LoopPoint> &b, const Sim3d &S21,
                   const PinholeIntrinsics &K, const LoopVerificationOptions &o, std::vector<std::pair<int, int>> &pairs)
 {
@@ -100,6 +150,14 @@ int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<LoopPoint> 
   for (const auto &p : pairs) {
     usedA[static_cast<size_t>(p.first)] = usedB[static_cast<size_t>(p.second)] = true;
   }
+  std::vector<double> radius2(a.size());
+  double maxRadius = o.guidedRadiusPx;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const double r = o.guidedRadiusPx * std::pow(kLevelScale, a[i].octave);
+    radius2[i] = r * r;
+    maxRadius = std::max(maxRadius, r);
+  }
+  const PixelGrid grid(a, std::max(maxRadius, 1.));
   int added = 0;
   for (size_t j = 0; j < b.size(); ++j) {
     if (usedB[j]) {
@@ -111,17 +169,17 @@ int guidedMatches(const std::vector<LoopPoint> &a, const std::vector<LoopPoint> 
     }
     const Eigen::Vector2d uv = K.project(X2);
     int best = o.maxDistance + 1, bestIndex = -1;
-    for (size_t i = 0; i < a.size(); ++i) {
-      const double radius = o.guidedRadiusPx * std::pow(kLevelScale, a[i].octave);
-      if (usedA[i] || (a[i].uv - uv).squaredNorm() > radius * radius) {
-        continue;
+    grid.forEachNear(uv, [&](int i) {
+      const size_t k = static_cast<size_t>(i);
+      if (usedA[k] || (a[k].uv - uv).squaredNorm() > radius2[k]) {
+        return;
       }
-      const int d = hammingDistance(a[i].orb, b[j].orb);
-      if (d < best) {
+      const int d = hammingDistance(a[k].orb, b[j].orb);
+      if (d < best || (d == best && i < bestIndex)) {
         best = d;
-        bestIndex = static_cast<int>(i);
+        bestIndex = i;
       }
-    }
+    });
     if (bestIndex >= 0) {
       usedA[static_cast<size_t>(bestIndex)] = usedB[j] = true;
       pairs.emplace_back(bestIndex, static_cast<int>(j));
