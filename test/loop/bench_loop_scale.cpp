@@ -6,7 +6,9 @@
 //     holds 500 words of the shipped vocabulary's 413,203, drawn as a run that goes round the same room: 250 places a
 //     lap, consecutive places sharing half their words, a revisit re-detecting 70 % of the place's words;
 //   - BM_LoopCorrection: solveLoopCorrection() on a chain of keyframes (pose-pose edges to the 2 previous ones, as the
-//     window leaves them), 7 window keyframes held, one loop from the newest stored keyframe back to the first.
+//     window leaves them), 7 window keyframes held, one loop from the newest stored keyframe back to the first; with
+//     laps_linked 4, each keyframe is also joined to its place and the two next to it on each of the 4 laps before
+//     (a map re-used lap after lap, 14 edges a keyframe, as hslam_many_laps' graph has about 15).
 // Peak resident memory of the process is printed at the end (VmHWM). Labelled "benchmark": not run by CI.
 #include "loop/KeyframeDatabase.h"
 #include "loop/LoopCorrection.h"
@@ -109,9 +111,19 @@ hslam::SE3d cameraPose(int k, double drift)
   return hslam_test::circleCamera(k, kPlacesPerLap, drift);
 }
 
+//! An edge between stored keyframes \e from and \e to, measured by the drifting odometry.
+void addOdometryEdge(hslam::GlobalMap &map, int from, int to)
+{
+  hslam::PosePoseEdge e;
+  e.from = from;
+  e.to = to;
+  e.toMfrom = cameraPose(to, 1e-4) * cameraPose(from, 1e-4).inverse();
+  map.addPosePoseEdge(e);
+}
+
 void BM_LoopCorrection(benchmark::State &state)
 {
-  const int n = static_cast<int>(state.range(0));
+  const int n = static_cast<int>(state.range(0)), lapsLinked = static_cast<int>(state.range(1));
   hslam::GlobalMap map;
   for (int k = 0; k < n; ++k) {
     hslam::GlobalKeyframe g;
@@ -119,11 +131,16 @@ void BM_LoopCorrection(benchmark::State &state)
     g.cMw = cameraPose(k, 1e-4); // the odometry drifts
     map.add(g);
     for (int d = 1; d <= 2 && k - d >= 0; ++d) {
-      hslam::PosePoseEdge e;
-      e.from = k - d;
-      e.to = k;
-      e.toMfrom = cameraPose(k, 1e-4) * cameraPose(k - d, 1e-4).inverse();
-      map.addPosePoseEdge(e);
+      addOdometryEdge(map, k - d, k);
+    }
+    // A map re-used lap after lap: the same place and its two neighbours on each of the last lapsLinked laps.
+    for (int lap = 1; lap <= lapsLinked; ++lap) {
+      for (int d = -1; d <= 1; ++d) {
+        const int other = k - lap * kPlacesPerLap + d;
+        if (other >= 0 && other < k) {
+          addOdometryEdge(map, other, k);
+        }
+      }
     }
   }
   std::map<int, hslam::SE3d> window;
@@ -151,7 +168,17 @@ void BM_LoopCorrection(benchmark::State &state)
   }
   state.counters["keyframes_moved"] = static_cast<double>(moved);
 }
-BENCHMARK(BM_LoopCorrection)->Arg(1000)->Arg(3000)->Arg(10000)->Unit(benchmark::kMillisecond)->Iterations(3);
+BENCHMARK(BM_LoopCorrection)
+    ->ArgsProduct({{1000, 3000, 10000}, {0}})
+    ->ArgNames({"keyframes", "laps_linked"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+// Once each: at 10,000 keyframes a lap-linked correction takes minutes (docs/global-map-and-loops.md).
+BENCHMARK(BM_LoopCorrection)
+    ->ArgsProduct({{1000, 3000, 10000}, {4}})
+    ->ArgNames({"keyframes", "laps_linked"})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
 
 //! Peak resident memory, printed when the program ends.
 struct PeakMemory {
