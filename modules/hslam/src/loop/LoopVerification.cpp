@@ -96,7 +96,8 @@ std::vector<std::pair<int, int>> matchSides(const std::vector<std::vector<LoopPo
 /*!
   Side A's points by square cell of the largest search radius, so that a projection's candidates are those of the
   3 x 3 cells around it (guided matching compared every B point with every A point: most of a verification's
-  time). The cells are sorted keys, not an array: a point just in front of a camera projects arbitrarily far.
+  time). The cells are sorted keys, not an array (OrbMatcher's grid covers one image): a side's points and
+  projections can lie anywhere, and a point just in front of a camera projects arbitrarily far.
 */
 class PixelGrid
 {
