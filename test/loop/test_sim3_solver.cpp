@@ -360,6 +360,129 @@ TEST(LoopCorrection, EachLoopIsKeptAsOneEdgeThatStillHoldsAtTheNextCorrection)
   EXPECT_LT(after, 0.1 * before);
   EXPECT_LT(relativeError(map, 30, 10), 0.1 * before);
 }
+
+//! A run of \e stored keyframes round a circle of 60 places, the last 3 in the window, whose odometry drifts from
+//! keyframe \e driftFrom on (the ones before: reconciled, as earlier loops leave them). Each keyframe is joined to the
+//! one before at the stored relative pose; with \e lapLinked also to its place and the two beside it on the lap
+//! before, at the true relative pose (what re-used points measure).
+struct LapRun {
+  static constexpr int kPlaces = 60, kWindow = 3;
+  static constexpr double kDrift = 2e-3;
+  hslam::GlobalMap map;
+  std::map<int, hslam::SE3d> window;
+  int driftFrom;
+
+  static hslam::SE3d truth(int k) { return hslam_test::circleCamera(k, kPlaces, 0.); }
+  //! The odometry's pose: the camera centre drifted along z by kDrift a keyframe from \e driftFrom on.
+  hslam::SE3d odometry(int k) const
+  {
+    return truth(k) *
+           hslam::SE3d(Eigen::Quaterniond::Identity(), Eigen::Vector3d(0., 0., -kDrift * std::max(0, k - driftFrom)));
+  }
+  void link(int from, int to, const hslam::SE3d &toMfrom)
+  {
+    hslam::PosePoseEdge e;
+    e.from = from;
+    e.to = to;
+    e.toMfrom = toMfrom;
+    map.addPosePoseEdge(e);
+  }
+  LapRun(int stored, bool lapLinked, int driftFrom_) : driftFrom(driftFrom_)
+  {
+    for (int k = 0; k < stored + kWindow; ++k) {
+      if (k < stored) {
+        hslam::GlobalKeyframe g;
+        g.id = k;
+        g.cMw = odometry(k);
+        map.add(g);
+      } else {
+        window[k] = odometry(k);
+      }
+      if (k > 0) {
+        link(k - 1, k, odometry(k) * odometry(k - 1).inverse());
+      }
+      for (int d = -1; d <= 1 && lapLinked; ++d) {
+        if (k - kPlaces + d >= 0) {
+          link(k - kPlaces + d, k, truth(k) * truth(k - kPlaces + d).inverse());
+        }
+      }
+    }
+  }
+  //! The error of the relative pose of \e a and \e b before any correction.
+  double errorBefore(int a, int b) const
+  {
+    return transformError(Sim3d(odometry(a) * odometry(b).inverse(), 1.), Sim3d(truth(a) * truth(b).inverse(), 1.));
+  }
+  //! Solve the loop from keyframe \e keyframe to its place on the first lap, bending at most \e maxFree keyframes.
+  std::vector<std::pair<int, Sim3d>> correct(int keyframe, size_t maxFree) const
+  {
+    hslam::DetectedLoop loop;
+    loop.keyframe = keyframe;
+    loop.candidate = keyframe % kPlaces;
+    loop.SkeyframeCandidate = Sim3d(truth(keyframe) * truth(loop.candidate).inverse(), 1.);
+    std::vector<hslam::PoseGraphEdge> constraints;
+    std::vector<std::pair<int, Sim3d>> solution;
+    EXPECT_TRUE(hslam::solveLoopCorrection(map, 0, window, constraints, loop, solution, maxFree));
+    return solution;
+  }
+};
+
+//! The solution's similarity of keyframe \e id.
+Sim3d solved(const std::vector<std::pair<int, Sim3d>> &solution, int id)
+{
+  for (const auto &s : solution) {
+    if (s.first == id) {
+      return s.second;
+    }
+  }
+  ADD_FAILURE() << "keyframe " << id << " not in the solution";
+  return Sim3d();
+}
+
+//! Error of the solved relative pose of \e a and \e b against the truth.
+double solvedError(const std::vector<std::pair<int, Sim3d>> &solution, int a, int b)
+{
+  const Sim3d truth(LapRun::truth(a) * LapRun::truth(b).inverse(), 1.);
+  return transformError(solved(solution, a) * solved(solution, b).inverse(), truth);
+}
+
+TEST(LoopCorrection, AMapTiedLapAfterLapBendsItsNewestKeyframesAndMovesItsPastAsOne)
+{
+  // 5 laps of 60 keyframes, each tied to the lap before, the odometry drifting since keyframe 200. Held to its 100
+  // newest keyframes, the correction must move the 200 older ones as one (their relative poses unchanged) and still
+  // close the loop about as well as bending them all.
+  const LapRun run(300, true, 200);
+  const int query = 299, candidate = 299 % LapRun::kPlaces;
+  const auto all = run.correct(query, 100000), held = run.correct(query, 100);
+  ASSERT_EQ(all.size(), 300u);
+  ASSERT_EQ(held.size(), 300u);
+  const double before = run.errorBefore(query, candidate);
+  std::printf("loop %d-%d: error %.4f before, %.4f bending all, %.4f bending the newest 100\n", query, candidate,
+              before, solvedError(all, query, candidate), solvedError(held, query, candidate));
+  EXPECT_LT(solvedError(all, query, candidate), 0.1 * before);
+  EXPECT_LT(solvedError(held, query, candidate), 0.1 * before);
+  // The past (keyframes 0-199) moved as one: its relative poses are the stored ones; bending all changes them.
+  const auto storedRelative = [&](int a, int b) {
+    return Sim3d(run.map.find(a)->cMw, 1.) * Sim3d(run.map.find(b)->cMw, 1.).inverse();
+  };
+  EXPECT_LT(transformError(solved(held, 0) * solved(held, 199).inverse(), storedRelative(0, 199)), 1e-9);
+  EXPECT_GT(transformError(solved(all, 0) * solved(all, 199).inverse(), storedRelative(0, 199)), 1e-6);
+  // The newest keyframes bent: not the rigid motion of the past.
+  EXPECT_GT(transformError(solved(held, 200) * solved(held, 299).inverse(), storedRelative(200, 299)), 1e-6);
+}
+
+TEST(LoopCorrection, ALongLoopHangingByItsChainAloneBendsItsWholeSpan)
+{
+  // One long loop, nothing else tying its start to its end: however large, the whole span bends, as without a cap.
+  const LapRun run(300, false, 0);
+  const auto all = run.correct(299, 100000), capped = run.correct(299, 100);
+  ASSERT_EQ(all.size(), capped.size());
+  for (size_t i = 0; i < all.size(); ++i) {
+    EXPECT_EQ(all[i].first, capped[i].first);
+    EXPECT_LT(transformError(all[i].second, capped[i].second), 1e-12) << "keyframe " << all[i].first;
+  }
+  EXPECT_LT(solvedError(capped, 299, 59), 0.1 * run.errorBefore(299, 59));
+}
 } // namespace
 
 TEST_P(PoseGraphSolvers, SolutionDoesNotDependOnInsertionOrderOrHeapLayout)

@@ -7,7 +7,8 @@
 
 #include <visp3/hslam/vpHSlamLog.h>
 
-#include <set>
+#include <algorithm>
+#include <limits>
 
 namespace hslam
 {
@@ -19,22 +20,32 @@ constexpr int kEssentialCovisibility = 100;
 constexpr int kLoopGraphIterations = 20;
 //! Stored neighbours of the candidate tied to the querying side (ORB-SLAM: the connected keyframes).
 constexpr size_t kCandidateNeighbours = 5;
+//! Stored keyframes apart from which an edge is a revisit, not the window's own measurement (it holds 7).
+constexpr size_t kRevisitSpan = 50;
+//! Revisit edges across the boundary from which the past counts as tied to the present (one loop adds one).
+constexpr size_t kMinRevisitTies = 20;
+//! Vertex id of the past, which moves as one.
+constexpr int kPastVertex = std::numeric_limits<int>::min();
 
-//! The keyframes a correction's graph holds: the window's (fixed) and the segment's stored ones (free).
+//! The keyframes a correction's graph holds: the window's (fixed), the segment's stored ones (free), and among the
+//! latter, when the map is large and ties its past to its present, the older ones held together (the past).
 struct SegmentKeyframes {
   const GlobalMap &map;
   int segment;
   const std::map<int, SE3d> &windowPoses;
+  //! Stored keyframes with a smaller id move together, as one similarity (kPastVertex); none when INT_MIN.
+  int firstFree = std::numeric_limits<int>::min();
 
   bool holds(int id) const
   {
     const GlobalKeyframe *g = map.find(id);
     return windowPoses.count(id) > 0 || (g && g->segment == segment);
   }
-  //! An edge that can move something: both ends held, not both in the window (fixed to each other).
+  bool inPast(int id) const { return id < firstFree && !windowPoses.count(id) && holds(id); }
+  //! An edge that can move something: both ends held, not both in the window or both in the past.
   bool linksStored(int a, int b) const
   {
-    return holds(a) && holds(b) && !(windowPoses.count(a) && windowPoses.count(b));
+    return holds(a) && holds(b) && !(windowPoses.count(a) && windowPoses.count(b)) && !(inPast(a) && inPast(b));
   }
   //! Pose of keyframe \e id, stored or in the window.
   SE3d pose(int id) const
@@ -42,20 +53,65 @@ struct SegmentKeyframes {
     const auto w = windowPoses.find(id);
     return w != windowPoses.end() ? w->second : map.find(id)->cMw;
   }
+  //! The segment's stored keyframes outside the window, in increasing id (the order they were stored in).
+  std::vector<int> stored() const
+  {
+    std::vector<int> ids;
+    for (const auto &entry : map.keyframes()) {
+      if (entry.second.segment == segment && !windowPoses.count(entry.first)) {
+        ids.push_back(entry.first);
+      }
+    }
+    return ids;
+  }
 };
 
-//! The vertices: the window's keyframes fixed, the segment's stored ones free (their ids in \e stored).
-void addVertices(const SegmentKeyframes &keyframes, PoseGraph &graph, std::vector<int> &stored)
+/*!
+  Where a large map's correction stops bending it: the id of the oldest of the \e maxFreeKeyframes newest stored
+  keyframes, when at least kMinRevisitTies of the map's edges join a keyframe older than that to a newer one at least
+  kRevisitSpan stored keyframes apart (places revisited, re-used points, loops: the past and the present already agree
+  there, and a new loop only adjusts the present). INT_MIN, everything free, otherwise: a map that size, or one whose
+  past hangs from the present by the chain alone (one long loop, where the whole span must bend), or a small map.
+*/
+int firstFreeKeyframe(const SegmentKeyframes &keyframes, const std::vector<CovisibilityEdge> &covisibility,
+                      const std::vector<PoseGraphEdge> &constraints, size_t maxFreeKeyframes)
 {
-  for (const auto &w : keyframes.windowPoses) {
-    graph.addVertex(w.first, Sim3d(w.second, 1.), true);
+  const std::vector<int> ids = keyframes.stored();
+  maxFreeKeyframes = std::max<size_t>(maxFreeKeyframes, 1);
+  if (ids.size() <= maxFreeKeyframes) {
+    return std::numeric_limits<int>::min();
   }
-  for (const auto &entry : keyframes.map.keyframes()) {
-    if (entry.second.segment == keyframes.segment && !keyframes.windowPoses.count(entry.first)) {
-      graph.addVertex(entry.first, Sim3d(entry.second.cMw, 1.), false);
-      stored.push_back(entry.first);
+  const int boundary = ids[ids.size() - maxFreeKeyframes];
+  // Rank in storage order; the window's keyframes are the newest.
+  const auto rank = [&](int id) {
+    return keyframes.windowPoses.count(id)
+               ? ids.size()
+               : static_cast<size_t>(std::lower_bound(ids.begin(), ids.end(), id) - ids.begin());
+  };
+  size_t ties = 0;
+  const auto count = [&](int a, int b) {
+    if (!keyframes.holds(a) || !keyframes.holds(b)) {
+      return;
+    }
+    const size_t ra = rank(a), rb = rank(b);
+    const bool crosses =
+        (a < boundary && !keyframes.windowPoses.count(a)) != (b < boundary && !keyframes.windowPoses.count(b));
+    if (crosses && std::max(ra, rb) - std::min(ra, rb) > kRevisitSpan) {
+      ++ties;
+    }
+  };
+  for (const PosePoseEdge &e : keyframes.map.posePoseEdges()) {
+    count(e.from, e.to);
+  }
+  for (const CovisibilityEdge &e : covisibility) {
+    if (e.weight >= kEssentialCovisibility) {
+      count(e.a, e.b);
     }
   }
+  for (const PoseGraphEdge &c : constraints) {
+    count(c.i, c.j);
+  }
+  return ties >= kMinRevisitTies ? boundary : std::numeric_limits<int>::min();
 }
 
 PoseGraphEdge edge(int i, int j, const Sim3d &Sji)
@@ -68,6 +124,89 @@ PoseGraphEdge edge(int i, int j, const Sim3d &Sji)
 }
 
 /*!
+  The pose graph of one correction. The past, when there is one, is a single free vertex kPastVertex, the similarity
+  T^-1 that moves every past keyframe as one (S_pw = S_pw0 T^-1): an edge (p, j) from a past keyframe p measures
+  S_jp, and its residual log(S_jp S_pw0 T^-1 S_jw^-1) is that of an edge (kPastVertex, j) measuring S_jp S_pw0. An
+  edge into the past is turned round first (the same measurement, its residual seen from the other end). Edges
+  between two past keyframes are constant under that motion and left out.
+*/
+class CorrectionGraph
+{
+public:
+  explicit CorrectionGraph(const SegmentKeyframes &keyframes) : m_keyframes(keyframes)
+  {
+    for (const auto &w : keyframes.windowPoses) {
+      m_graph.addVertex(w.first, Sim3d(w.second, 1.), true);
+    }
+    for (int id : keyframes.stored()) {
+      if (keyframes.inPast(id)) {
+        m_past.push_back(id);
+      } else {
+        m_graph.addVertex(id, Sim3d(keyframes.map.find(id)->cMw, 1.), false);
+        m_free.push_back(id);
+      }
+    }
+  }
+
+  void add(PoseGraphEdge e)
+  {
+    if (m_keyframes.inPast(e.i) && m_keyframes.inPast(e.j)) {
+      return;
+    }
+    if (m_keyframes.inPast(e.j)) {
+      std::swap(e.i, e.j);
+      e.Sji = e.Sji.inverse();
+    }
+    if (m_keyframes.inPast(e.i)) {
+      e.Sji = e.Sji * Sim3d(m_keyframes.pose(e.i), 1.);
+      e.i = kPastVertex;
+      if (!m_pastInGraph) {
+        m_graph.addVertex(kPastVertex, Sim3d(), false);
+        m_pastInGraph = true;
+      }
+    }
+    m_graph.addEdge(e);
+  }
+  //! An edge at the current relative pose of \e a and \e b.
+  void addFromCurrent(int a, int b)
+  {
+    if (m_keyframes.inPast(a) || m_keyframes.inPast(b)) {
+      add(edge(a, b, Sim3d(m_keyframes.pose(b), 1.) * Sim3d(m_keyframes.pose(a), 1.).inverse()));
+    } else {
+      m_graph.addEdgeFromCurrent(a, b);
+    }
+  }
+
+  PoseGraph &graph() { return m_graph; }
+  size_t pastKeyframes() const { return m_past.size(); }
+
+  //! The solved similarity of every stored keyframe into \e solution; false (and empty) when one is not usable.
+  bool readSolution(std::vector<std::pair<int, Sim3d>> &solution) const
+  {
+    const auto usable = [](const Sim3d &S) { return S.translation().allFinite() && S.scale() > 0.; };
+    const Sim3d past = m_pastInGraph ? m_graph.vertex(kPastVertex) : Sim3d();
+    if (!usable(past)) {
+      return false;
+    }
+    for (int id : m_keyframes.stored()) {
+      const Sim3d S = m_keyframes.inPast(id) ? Sim3d(m_keyframes.pose(id), 1.) * past : m_graph.vertex(id);
+      if (!usable(S)) {
+        solution.clear();
+        return false;
+      }
+      solution.emplace_back(id, S);
+    }
+    return true;
+  }
+
+private:
+  const SegmentKeyframes &m_keyframes;
+  PoseGraph m_graph;
+  std::vector<int> m_free, m_past;
+  bool m_pastInGraph = false;
+};
+
+/*!
   What the map and the loops before measured: pose-pose edges as the window measured them (the relative pose of its
   last linearisation), strong co-visibility at today's relative poses, and every loop corrected so far (one edge
   each, \e constraints), so each correction is the batch solution of the window's measurements and all loops. At
@@ -75,22 +214,22 @@ PoseGraphEdge edge(int i, int j, const Sim3d &Sji)
   ATE over five budgets rose from 0.016 to 0.023 m (on the real sequences played there and back the two were within
   5 %, either way).
 */
-void addMeasuredEdges(const SegmentKeyframes &keyframes, const std::vector<PoseGraphEdge> &constraints,
-                      PoseGraph &graph)
+void addMeasuredEdges(const SegmentKeyframes &keyframes, const std::vector<CovisibilityEdge> &covisibility,
+                      const std::vector<PoseGraphEdge> &constraints, CorrectionGraph &graph)
 {
   for (const PosePoseEdge &e : keyframes.map.posePoseEdges()) {
     if (keyframes.linksStored(e.from, e.to)) {
-      graph.addEdge(edge(e.from, e.to, Sim3d(e.toMfrom, 1.)));
+      graph.add(edge(e.from, e.to, Sim3d(e.toMfrom, 1.)));
     }
   }
-  for (const CovisibilityEdge &e : keyframes.map.covisibilityEdges()) {
+  for (const CovisibilityEdge &e : covisibility) {
     if (e.weight >= kEssentialCovisibility && keyframes.linksStored(e.a, e.b)) {
-      graph.addEdgeFromCurrent(e.a, e.b);
+      graph.addFromCurrent(e.a, e.b);
     }
   }
   for (const PoseGraphEdge &c : constraints) {
     if (keyframes.holds(c.i) && keyframes.holds(c.j)) {
-      graph.addEdge(c);
+      graph.add(c);
     }
   }
 }
@@ -100,7 +239,7 @@ void addMeasuredEdges(const SegmentKeyframes &keyframes, const std::vector<PoseG
   to the candidate and its best co-visible keyframes, through the measured similarity and each side's current
   relative poses. Returns the first, the measured similarity itself (candidate to querying keyframe).
 */
-PoseGraphEdge addLoopEdges(const SegmentKeyframes &keyframes, const DetectedLoop &loop, PoseGraph &graph)
+PoseGraphEdge addLoopEdges(const SegmentKeyframes &keyframes, const DetectedLoop &loop, CorrectionGraph &graph)
 {
   const SE3d cMw = keyframes.map.find(loop.candidate)->cMw;
   std::vector<int> candidateSide = {loop.candidate};
@@ -120,40 +259,27 @@ PoseGraphEdge addLoopEdges(const SegmentKeyframes &keyframes, const DetectedLoop
     for (int n : candidateSide) {
       added.push_back(
           edge(n, q, SqK * loop.SkeyframeCandidate * Sim3d(cMw * keyframes.map.find(n)->cMw.inverse(), 1.)));
-      graph.addEdge(added.back());
+      graph.add(added.back());
     }
   }
   return added.front();
-}
-
-//! The solved similarity of every stored keyframe into \e solution; false (and empty) when one is not usable.
-bool readSolution(const PoseGraph &graph, const std::vector<int> &stored, std::vector<std::pair<int, Sim3d>> &solution)
-{
-  for (int id : stored) {
-    const Sim3d S = graph.vertex(id);
-    if (!S.translation().allFinite() || !(S.scale() > 0.)) {
-      solution.clear();
-      return false;
-    }
-    solution.emplace_back(id, S);
-  }
-  return true;
 }
 } // namespace
 
 bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
                          std::vector<PoseGraphEdge> &constraints, const DetectedLoop &loop,
-                         std::vector<std::pair<int, Sim3d>> &solution)
+                         std::vector<std::pair<int, Sim3d>> &solution, size_t maxFreeKeyframes)
 {
   solution.clear();
-  const SegmentKeyframes keyframes{map, segment, windowPoses};
-  PoseGraph graph;
-  std::vector<int> stored;
-  addVertices(keyframes, graph, stored);
-  addMeasuredEdges(keyframes, constraints, graph);
-  const PoseGraphEdge measured = addLoopEdges(keyframes, loop, graph);
+  SegmentKeyframes keyframes{map, segment, windowPoses};
+  const std::vector<CovisibilityEdge> covisibility = map.covisibilityEdges();
+  keyframes.firstFree = firstFreeKeyframe(keyframes, covisibility, constraints, maxFreeKeyframes);
+  CorrectionGraph correction(keyframes);
+  addMeasuredEdges(keyframes, covisibility, constraints, correction);
+  const PoseGraphEdge measured = addLoopEdges(keyframes, loop, correction);
+  PoseGraph &graph = correction.graph();
   const PoseGraphSummary summary = graph.optimize(kLoopGraphIterations);
-  if (!summary.usable || !readSolution(graph, stored, solution)) {
+  if (!summary.usable || !correction.readSolution(solution)) {
     return false;
   }
   // What later corrections keep of this loop: its measured similarity between its two keyframes, as an ordinary
@@ -167,9 +293,10 @@ bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, 
   // keyframes (docs/global-map-and-loops.md).
   constraints.push_back(measured);
   VP_HSLAM_LOG(vpHSlamLog::info, "loop " << loop.keyframe << "-" << loop.candidate << ": pose graph "
-                                         << graph.vertexCount() << " vertices, " << graph.edgeCount() << " edges, "
+                                         << graph.vertexCount() << " vertices (" << correction.pastKeyframes()
+                                         << " past keyframes held together), " << graph.edgeCount() << " edges, "
                                          << summary.iterations << " iterations, cost " << summary.initialCost << " -> "
-                                         << summary.finalCost);
+                                         << summary.finalCost << ", " << summary.ms << " ms");
   return true;
 }
 } // namespace hslam
