@@ -173,7 +173,7 @@ BENCHMARK(BM_LoopCorrection)
     ->ArgNames({"keyframes", "laps_linked"})
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3);
-// Past 1,000 keyframes the lap-linked map's older keyframes move as one (kLoopMaxFreeKeyframes); bent whole, the
+// Past 500 keyframes the lap-linked map's older keyframes move as one (kLoopMaxFreeKeyframes); bent whole, the
 // 10,000 took 379 s (docs/global-map-and-loops.md).
 BENCHMARK(BM_LoopCorrection)
     ->ArgsProduct({{1000, 3000, 10000}, {4}})

@@ -20,9 +20,9 @@
   stored keyframes and the map's own edges already tie the older ones to the newer (revisits, re-used points, earlier
   loops: at least 20 edges joining keyframes 50 or more apart across the boundary), only the newest
   kLoopMaxFreeKeyframes bend and the older ones move together as one similarity (one vertex). The past and the
-  present already agree where they are tied, so a new loop mostly adjusts the present; the correction then costs
-  about the same at any size (0.34 s at 10,000 lap-linked keyframes). A past that hangs from the present by the chain
-  alone (one long loop, whose whole span must bend) stays free whatever its size: a chain costs 0.75 s at 10,000.
+  present already agree where they are tied, so a new loop mostly adjusts the present, and a correction costs about
+  the same at any size. A past that hangs from the present by the chain alone (one long loop, whose whole span must
+  bend) stays free whatever its size: a chain costs 0.75 s at 10,000 keyframes.
 
   Threading: a pure function of its inputs.
 */
@@ -39,10 +39,12 @@
 namespace hslam
 {
 /*!
-  Stored keyframes a correction bends at most when the map ties its older keyframes to the newer ones (above). At
-  1,000, a lap-linked correction took 0.25-0.34 s in bench_loop_scale, whatever the map's size.
+  Stored keyframes a correction bends at most when the map ties its older keyframes to the newer ones (above). Same
+  VM: bench_loop_scale's lap-linked correction takes 0.06 / 0.09 / 0.15 s at 1,000 / 3,000 / 10,000 keyframes with
+  500; in hslam_many_laps, whose re-used laps tie each keyframe to more of the others, graphs of 500 free keyframes
+  took 0.13-0.19 s, of 700 0.5-0.9 s and of 1,000 2.0 s (docs/global-map-and-loops.md).
 */
-constexpr size_t kLoopMaxFreeKeyframes = 1000;
+constexpr size_t kLoopMaxFreeKeyframes = 500;
 
 /*!
   Solve the pose graph of segment \e segment of \e map for \e loop. \e constraints holds the edges of the loops
