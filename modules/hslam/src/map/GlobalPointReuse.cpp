@@ -38,14 +38,14 @@ bool projectStored(const SE3d &targetMhost, const PinholeIntrinsics &K, int widt
 std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<int> &windowIds,
                                       const ReuseTarget &target, int maxKeyframes)
 {
+  // The stored keyframes co-visible with the window: the window's own rows of the co-visibility graph. Every edge of
+  // the map was walked before, 20 % of hslam_many_laps' time at 2,000 stored keyframes (the same set).
   std::set<int> linked;
-  for (const CovisibilityEdge &e : map.covisibilityEdges()) {
-    const bool aWindow = std::find(windowIds.begin(), windowIds.end(), e.a) != windowIds.end();
-    const bool bWindow = std::find(windowIds.begin(), windowIds.end(), e.b) != windowIds.end();
-    if (aWindow && !bWindow) {
-      linked.insert(e.b);
-    } else if (bWindow && !aWindow) {
-      linked.insert(e.a);
+  for (int w : windowIds) {
+    for (int n : map.covisibleWith(w)) {
+      if (std::find(windowIds.begin(), windowIds.end(), n) == windowIds.end()) {
+        linked.insert(n);
+      }
     }
   }
   std::vector<std::pair<int, int>> scored; // (projected samples, id)
