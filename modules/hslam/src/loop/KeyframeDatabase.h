@@ -89,6 +89,7 @@ public:
   std::size_t size() const;
   bool contains(KeyframeId id) const;
   std::size_t wordCount() const { return m_wordCount; }
+  const KeyframeDatabaseOptions &options() const { return m_options; }
   //! Bytes held on the heap: the inverted index and the stored vectors, allocator overhead included.
   double memoryBytes() const;
 

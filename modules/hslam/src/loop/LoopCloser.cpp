@@ -229,7 +229,9 @@ bool LoopCloser::query(int id, const GlobalMap &map, const std::set<int> &connec
     return c == id || connected.count(c) > 0 || own.count(c) > 0 || it == m_keyframes.end() ||
            it->second.segment != m_segment;
   };
-  q.covisible = [&](int c) { return map.covisibleWith(c); };
+  // Only the first groupNeighbours count: a keyframe of a room revisited lap after lap is co-visible with hundreds.
+  const size_t groupNeighbours = static_cast<size_t>(std::max(0, m_database.options().groupNeighbours));
+  q.covisible = [&](int c) { return map.covisibleWith(c, groupNeighbours); };
   std::vector<std::pair<int, std::vector<int>>> groups;
   for (const KeyframeDatabase::Candidate &c : m_database.query(bow, q)) {
     groups.emplace_back(c.id, map.covisibleWith(c.id));

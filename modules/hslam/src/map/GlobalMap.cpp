@@ -159,7 +159,7 @@ std::vector<CovisibilityEdge> GlobalMap::covisibilityEdges() const
   return out;
 }
 
-std::vector<int> GlobalMap::covisibleWith(int id) const
+std::vector<int> GlobalMap::covisibleWith(int id, size_t maxCount) const
 {
   std::vector<int> out;
   auto row = m_shared.find(id);
@@ -167,6 +167,9 @@ std::vector<int> GlobalMap::covisibleWith(int id) const
     return out;
   }
   for (const auto &e : row->second) {
+    if (out.size() >= maxCount) {
+      break;
+    }
     if (e.second >= m_options.covisibilityMinShared && !isCulled(e.first)) {
       out.push_back(e.first);
     }

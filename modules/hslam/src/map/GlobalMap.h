@@ -42,6 +42,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <utility>
 #include <vector>
@@ -191,8 +192,9 @@ public:
 
   //! Co-visibility edges of weight >= covisibilityMinShared, culled keyframes left out.
   std::vector<CovisibilityEdge> covisibilityEdges() const;
-  //! Keyframes co-visible with \e id (any keyframe id, stored or still in the window), culled ones left out.
-  std::vector<int> covisibleWith(int id) const;
+  //! Keyframes co-visible with \e id (any keyframe id, stored or still in the window), culled ones left out; in
+  //! increasing id, at most \e maxCount of them.
+  std::vector<int> covisibleWith(int id, size_t maxCount = std::numeric_limits<size_t>::max()) const;
 
   /*!
     Culling rule of the file comment applied to a stored keyframe (again: later observations may make it
