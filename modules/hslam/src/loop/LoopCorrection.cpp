@@ -133,17 +133,16 @@ PoseGraphEdge edge(int i, int j, const Sim3d &Sji)
 class CorrectionGraph
 {
 public:
-  explicit CorrectionGraph(const SegmentKeyframes &keyframes) : m_keyframes(keyframes)
+  explicit CorrectionGraph(const SegmentKeyframes &keyframes) : m_keyframes(keyframes), m_stored(keyframes.stored())
   {
     for (const auto &w : keyframes.windowPoses) {
       m_graph.addVertex(w.first, Sim3d(w.second, 1.), true);
     }
-    for (int id : keyframes.stored()) {
+    for (int id : m_stored) {
       if (keyframes.inPast(id)) {
-        m_past.push_back(id);
+        ++m_pastKeyframes;
       } else {
         m_graph.addVertex(id, Sim3d(keyframes.map.find(id)->cMw, 1.), false);
-        m_free.push_back(id);
       }
     }
   }
@@ -178,7 +177,7 @@ public:
   }
 
   PoseGraph &graph() { return m_graph; }
-  size_t pastKeyframes() const { return m_past.size(); }
+  size_t pastKeyframes() const { return m_pastKeyframes; }
 
   //! The solved similarity of every stored keyframe into \e solution; false (and empty) when one is not usable.
   bool readSolution(std::vector<std::pair<int, Sim3d>> &solution) const
@@ -188,7 +187,7 @@ public:
     if (!usable(past)) {
       return false;
     }
-    for (int id : m_keyframes.stored()) {
+    for (int id : m_stored) {
       const Sim3d S = m_keyframes.inPast(id) ? Sim3d(m_keyframes.pose(id), 1.) * past : m_graph.vertex(id);
       if (!usable(S)) {
         solution.clear();
@@ -201,8 +200,9 @@ public:
 
 private:
   const SegmentKeyframes &m_keyframes;
+  const std::vector<int> m_stored; //!< the segment's stored keyframes outside the window, in increasing id
+  size_t m_pastKeyframes = 0;
   PoseGraph m_graph;
-  std::vector<int> m_free, m_past;
   bool m_pastInGraph = false;
 };
 
