@@ -78,7 +78,8 @@ if(HSLAM_FUZZ)
   if(HSLAM_SANITIZE)
     message(FATAL_ERROR "HSLAM_FUZZ brings its own sanitizers: leave HSLAM_SANITIZE empty")
   endif()
-  # -O1: the fuzz targets exercise parsers, whose speed does not matter; the whole library is compiled for them.
+  # -O1: the fuzz targets exercise parsers, whose speed does not matter (test/fuzz/CMakeLists.txt compiles only the
+  # module's files they run).
   add_compile_options(-O1 -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=all
                       -fsanitize-recover=nonnull-attribute -fno-omit-frame-pointer -g1)
   add_link_options(-fsanitize=address,undefined)

@@ -1,47 +1,18 @@
 #include "features/TagDetector.h"
 
+#include "common/PluginLoader.h"
+#include "features/AprilTagPlugin.h"
 #include "features/ImagePyramid.h"
 #include "math/ViSPConversions.h"
 
 #include <visp3/hslam/vpHSlamException.h>
-#ifdef VISP_HAVE_APRILTAG
-#include <visp3/detection/vpDetectorAprilTag.h>
-#endif
 
 #include <algorithm>
 #include <cmath>
-
-#ifndef VISP_HAVE_APRILTAG
-// ViSP built without its AprilTag detector: a tag cannot be used (vpHSlam::setTag() throws), the rest works.
-class vpDetectorAprilTag
-{
-};
-#endif
+#include <limits>
 
 namespace hslam
 {
-namespace
-{
-#ifdef VISP_HAVE_APRILTAG
-vpDetectorAprilTag::vpAprilTagFamily familyOf(const std::string &name)
-{
-  if (name == "tag36h11") {
-    return vpDetectorAprilTag::TAG_36h11;
-  }
-  if (name == "tag25h9") {
-    return vpDetectorAprilTag::TAG_25h9;
-  }
-  if (name == "tag16h5") {
-    return vpDetectorAprilTag::TAG_16h5;
-  }
-  if (name == "tagCircle21h7") {
-    return vpDetectorAprilTag::TAG_CIRCLE21h7;
-  }
-  throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: unknown family '" + name + "'");
-}
-#endif
-} // namespace
-
 TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m_tag(tag), m_K(K)
 {
   if (!tag.isSet()) {
@@ -51,10 +22,17 @@ TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m
   throw vpHSlamException(vpHSlamException::unsupported,
                          "tag detector: this ViSP was built without its AprilTag detector (VISP_HAVE_APRILTAG)");
 #else
-  m_detector.reset(new vpDetectorAprilTag(familyOf(tag.getFamily()), vpDetectorAprilTag::HOMOGRAPHY_VIRTUAL_VS));
-  m_detector->setAprilTagNbThreads(1);
-  // Full resolution for the quads: keyframes only, and corner accuracy is what sets the scale.
-  m_detector->setAprilTagQuadDecimate(1.f);
+  using Factory = AprilTagBackend *(*)(const char *, std::string *);
+  std::string error;
+  const auto factory =
+      reinterpret_cast<Factory>(loadPluginSymbol(kTagPluginFile, kTagPluginFactory, "HSLAM_TAG_PLUGIN", error));
+  if (factory == nullptr) {
+    throw vpHSlamException(vpHSlamException::unsupported, "tag detector: tags are detected by a plug-in: " + error);
+  }
+  m_detector.reset(factory(tag.getFamily().c_str(), &error));
+  if (!m_detector) {
+    throw vpHSlamException(vpHSlamException::invalidArgument, "tag detector: " + error);
+  }
 #endif
 }
 
@@ -68,23 +46,24 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
   (void)I;
   return out;
 #else
-  if (I.getSize() == 0 || !m_detector->detect(I)) {
-    return out;
+  std::vector<RawTagDetection> tags;
+  std::string error;
+  if (I.getSize() == 0 || !m_detector->detect(I, tags, error)) {
+    return out; // an image the detector fails on has no sighting; tracking and mapping go on
   }
-  const std::vector<int> ids = m_detector->getTagsId();
-  const std::vector<std::vector<vpImagePoint>> corners = m_detector->getTagsCorners();
-  m_lastRaw = static_cast<unsigned int>(ids.size());
+  m_lastRaw = static_cast<unsigned int>(tags.size());
   const double w = I.getWidth(), h = I.getHeight();
-  for (size_t i = 0; i < ids.size() && i < corners.size(); ++i) {
-    if ((m_tag.hasId() && ids[i] != m_tag.getId()) || corners[i].size() != 4) {
+  for (size_t i = 0; i < tags.size(); ++i) {
+    const std::vector<vpImagePoint> &corners = tags[i].corners;
+    if ((m_tag.hasId() && tags[i].id != m_tag.getId()) || corners.size() != 4) {
       continue;
     }
     TagSighting s;
-    s.id = ids[i];
+    s.id = tags[i].id;
     bool inside = true;
     double minSide = std::numeric_limits<double>::infinity();
     for (size_t k = 0; k < 4; ++k) {
-      const vpImagePoint &p = corners[i][k], &q = corners[i][(k + 1) % 4];
+      const vpImagePoint &p = corners[k], &q = corners[(k + 1) % 4];
       s.corners[k] = Eigen::Vector2d(p.get_u(), p.get_v());
       inside = inside && p.get_u() >= kBorderPx && p.get_v() >= kBorderPx && p.get_u() <= w - 1 - kBorderPx &&
                p.get_v() <= h - 1 - kBorderPx;
@@ -94,8 +73,7 @@ std::vector<TagSighting> TagDetector::detect(const vpImage<unsigned char> &I)
       continue;
     }
     vpHomogeneousMatrix cMt;
-    double error = 0.;
-    if (!m_detector->getPose(i, m_tag.getSize(), m_K, cMt, nullptr, &error, nullptr)) {
+    if (!m_detector->pose(i, m_tag.getSize(), m_K, cMt)) {
       continue;
     }
     // getPose reports the residual of its virtual visual servoing as a sum over the corners' normalised

@@ -32,10 +32,10 @@
 #include <memory>
 #include <vector>
 
-class vpDetectorAprilTag;
-
 namespace hslam
 {
+class AprilTagBackend;
+
 //! One tag seen in one image.
 struct TagSighting {
   int id = -1;
@@ -75,7 +75,7 @@ public:
 private:
   vpHSlamTag m_tag;
   vpCameraParameters m_K;
-  std::unique_ptr<vpDetectorAprilTag> m_detector;
+  std::unique_ptr<AprilTagBackend> m_detector; //!< vpDetectorAprilTag, in the plug-in libvisp_hslam_tag
   unsigned int m_lastRaw = 0;
 };
 } // namespace hslam
