@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <thread>
 
@@ -163,6 +164,71 @@ TEST(KeyframeDatabase, ConcurrentAddsRemovesAndQueries)
   reader.join();
   EXPECT_EQ(db.size(), 1000u);
 }
+// Words held by many keyframes (a room revisited lap after lap) leave their chain for a list of their own; keyframes
+// leaving must leave the index as if they had never come: after removing two thirds and adding others, every query
+// answers as a database built from the keyframes present.
+TEST(KeyframeDatabase, ManyHoldersPerWordAnswerAsAFreshDatabaseAfterRemovals)
+{
+  std::mt19937 rng(5);
+  auto randomVector = [&rng]() {
+    std::vector<std::uint32_t> words;
+    for (int i = 0; i < 60; ++i) {
+      words.push_back(static_cast<std::uint32_t>(rng() % 200)); // 200 words: each held by tens of keyframes
+    }
+    std::sort(words.begin(), words.end());
+    words.erase(std::unique(words.begin(), words.end()), words.end());
+    BowVector bow;
+    for (std::uint32_t w : words) {
+      bow.push_back({w, 1. / static_cast<double>(words.size())});
+    }
+    return bow;
+  };
+  std::map<int, BowVector> present;
+  KeyframeDatabase db(200);
+  for (int k = 0; k < 150; ++k) {
+    present[k] = randomVector();
+    db.add(k, present[k]);
+  }
+  for (int k = 0; k < 150; ++k) {
+    if (k % 3 != 0) {
+      ASSERT_TRUE(db.remove(k));
+      present.erase(k);
+    }
+  }
+  for (int k = 150; k < 200; ++k) {
+    present[k] = randomVector();
+    db.add(k, present[k]);
+  }
+  KeyframeDatabase fresh(200);
+  for (const auto &kv : present) {
+    fresh.add(kv.first, kv.second);
+  }
+  ASSERT_EQ(db.size(), fresh.size());
+  KeyframeDatabase::Query q;
+  q.excluded = [](int id) { return id % 7 == 0; };
+  for (int i = 0; i < 20; ++i) {
+    const BowVector query = randomVector();
+    const auto a = db.query(query, q), b = fresh.query(query, q);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_FALSE(a.empty());
+    for (std::size_t c = 0; c < a.size(); ++c) {
+      EXPECT_EQ(a[c].id, b[c].id);
+      EXPECT_EQ(a[c].commonWords, b[c].commonWords);
+      EXPECT_DOUBLE_EQ(a[c].score, b[c].score);
+    }
+  }
+  // Everything removed: nothing found, and the index holds no list any more.
+  const double emptyBytes = KeyframeDatabase(200).memoryBytes();
+  for (const auto &kv : present) {
+    ASSERT_TRUE(db.remove(kv.first));
+  }
+  EXPECT_TRUE(db.query(randomVector(), q).empty());
+  EXPECT_EQ(db.size(), 0u);
+  EXPECT_GT(db.memoryBytes(), emptyBytes - 1.); // pools keep their capacity until clear()
+  db.clear();
+  EXPECT_LE(db.memoryBytes(), emptyBytes + 64.);
+}
+
 TEST(KeyframeDatabase, MemoryCountIsTheHeapItTakes)
 {
   // memoryBytes() goes into the statistics' memory per stored keyframe: it must be what the inverted index and the

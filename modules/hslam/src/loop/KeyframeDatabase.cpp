@@ -12,6 +12,7 @@
 #include <functional>
 #include <mutex>
 #include <string>
+#include <utility>
 
 namespace hslam
 {
@@ -42,21 +43,65 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
   }
   using Index = decltype(m_index);
   using Vectors = decltype(m_vectors);
+  std::uint32_t keyframeSlot;
+  if (!m_freeSlots.empty()) {
+    keyframeSlot = m_freeSlots.back();
+    m_freeSlots.pop_back();
+  } else {
+    keyframeSlot = static_cast<std::uint32_t>(m_slots.size());
+    m_slots.emplace_back();
+  }
   for (const BowEntry &e : bow) {
-    std::uint32_t slot = m_freeHolders;
-    if (slot != kNoHolder) {
-      m_freeHolders = m_holders[slot].next;
+    const auto inserted = m_index.try_emplace(e.wordId, Word{kNoHolder, 0, kNoList});
+    m_heapBytes += inserted.second ? hashNodeHeapBytes<Index>() : 0.;
+    Word &word = inserted.first->second;
+    if (word.list == kNoList && word.chainLength == kChainedHolders) {
+      moveChainToList(word);
+    }
+    if (word.list != kNoList) {
+      std::vector<std::uint32_t> &list = m_lists[word.list];
+      const double before = vectorHeapBytes(list);
+      list.push_back(keyframeSlot);
+      m_heapBytes += vectorHeapBytes(list) - before;
+      continue;
+    }
+    std::uint32_t holder = m_freeHolders;
+    if (holder != kNoHolder) {
+      m_freeHolders = m_holders[holder].next;
     } else {
-      slot = static_cast<std::uint32_t>(m_holders.size());
+      holder = static_cast<std::uint32_t>(m_holders.size());
       m_holders.push_back(Holder());
     }
-    const auto inserted = m_index.try_emplace(e.wordId, kNoHolder);
-    m_holders[slot] = {id, inserted.first->second}; // in front of the word's chain
-    inserted.first->second = slot;
-    m_heapBytes += inserted.second ? hashNodeHeapBytes<Index>() : 0.;
+    m_holders[holder] = {keyframeSlot, word.chain}; // in front of the word's chain
+    word.chain = holder;
+    ++word.chainLength;
   }
-  const auto stored = m_vectors.emplace(id, bow).first;
-  m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second);
+  const auto stored = m_vectors.emplace(id, Stored{bow, keyframeSlot}).first;
+  m_slots[keyframeSlot] = {id, &stored->second.bow};
+  m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second.bow);
+}
+
+void KeyframeDatabase::moveChainToList(Word &word)
+{
+  std::uint32_t list;
+  if (!m_freeLists.empty()) {
+    list = m_freeLists.back();
+    m_freeLists.pop_back();
+  } else {
+    list = static_cast<std::uint32_t>(m_lists.size());
+    m_lists.emplace_back();
+  }
+  std::vector<std::uint32_t> &holders = m_lists[list];
+  holders.reserve(2 * kChainedHolders);
+  for (std::uint32_t h = word.chain; h != kNoHolder;) {
+    holders.push_back(m_holders[h].slot);
+    const std::uint32_t next = m_holders[h].next;
+    m_holders[h].next = m_freeHolders;
+    m_freeHolders = h;
+    h = next;
+  }
+  m_heapBytes += vectorHeapBytes(holders);
+  word = Word{kNoHolder, 0, list};
 }
 
 bool KeyframeDatabase::remove(KeyframeId id)
@@ -66,39 +111,64 @@ bool KeyframeDatabase::remove(KeyframeId id)
   if (it == m_vectors.end()) {
     return false;
   }
-  for (const BowEntry &e : it->second) {
+  const std::uint32_t keyframeSlot = it->second.slot;
+  for (const BowEntry &e : it->second.bow) {
     const auto word = m_index.find(e.wordId);
     if (word == m_index.end()) {
       continue;
     }
-    // Unlink the keyframe's entry from the word's chain; it joins the free chain.
-    std::uint32_t *link = &word->second;
-    while (*link != kNoHolder && m_holders[*link].id != id) {
-      link = &m_holders[*link].next;
+    Word &w = word->second;
+    if (w.list != kNoList) {
+      // Out of the word's list (its order does not matter); an emptied list is released.
+      std::vector<std::uint32_t> &list = m_lists[w.list];
+      const auto at = std::find(list.begin(), list.end(), keyframeSlot);
+      if (at != list.end()) {
+        *at = list.back();
+        list.pop_back();
+      }
+      if (list.empty()) {
+        m_heapBytes -= vectorHeapBytes(list);
+        std::vector<std::uint32_t>().swap(list);
+        m_freeLists.push_back(w.list);
+        w.list = kNoList;
+      }
+    } else {
+      // Unlink the keyframe's entry from the word's chain; it joins the free chain.
+      std::uint32_t *link = &w.chain;
+      while (*link != kNoHolder && m_holders[*link].slot != keyframeSlot) {
+        link = &m_holders[*link].next;
+      }
+      if (*link != kNoHolder) {
+        const std::uint32_t holder = *link;
+        *link = m_holders[holder].next;
+        m_holders[holder].next = m_freeHolders;
+        m_freeHolders = holder;
+        --w.chainLength;
+      }
     }
-    if (*link != kNoHolder) {
-      const std::uint32_t slot = *link;
-      *link = m_holders[slot].next;
-      m_holders[slot].next = m_freeHolders;
-      m_freeHolders = slot;
-    }
-    if (word->second == kNoHolder) {
+    if (w.list == kNoList && w.chain == kNoHolder) {
       m_heapBytes -= hashNodeHeapBytes<decltype(m_index)>();
       m_index.erase(word);
     }
   }
-  m_heapBytes -= hashNodeHeapBytes<decltype(m_vectors)>() + vectorHeapBytes(it->second);
+  m_heapBytes -= hashNodeHeapBytes<decltype(m_vectors)>() + vectorHeapBytes(it->second.bow);
   m_vectors.erase(it);
+  m_slots[keyframeSlot] = Slot();
+  m_freeSlots.push_back(keyframeSlot);
   return true;
 }
 
 void KeyframeDatabase::clear()
 {
   std::unique_lock<std::shared_mutex> lock(m_mutex);
-  m_index.clear();
-  std::vector<Holder>().swap(m_holders); // clear() would keep the capacity
+  decltype(m_index)().swap(m_index); // clear() would keep the buckets, and the vectors their capacity
+  std::vector<Holder>().swap(m_holders);
   m_freeHolders = kNoHolder;
-  m_vectors.clear();
+  std::vector<std::vector<std::uint32_t>>().swap(m_lists);
+  std::vector<std::uint32_t>().swap(m_freeLists);
+  decltype(m_vectors)().swap(m_vectors);
+  std::vector<Slot>().swap(m_slots);
+  std::vector<std::uint32_t>().swap(m_freeSlots);
   m_heapBytes = 0.;
 }
 
@@ -121,7 +191,7 @@ bool KeyframeDatabase::vectorOf(KeyframeId id, BowVector &bow) const
   if (it == m_vectors.end()) {
     return false;
   }
-  bow = it->second;
+  bow = it->second.bow;
   return true;
 }
 
@@ -132,25 +202,40 @@ std::vector<double> KeyframeDatabase::scoresWith(const BowVector &bow, const std
   for (KeyframeId id : ids) {
     const auto it = m_vectors.find(id);
     if (it != m_vectors.end()) {
-      scores.push_back(OrbVocabulary::score(bow, it->second));
+      scores.push_back(OrbVocabulary::score(bow, it->second.bow));
     }
   }
   return scores;
 }
 
-std::unordered_map<KeyframeDatabase::KeyframeId, int> KeyframeDatabase::sharedWordCounts(const BowVector &bow) const
+std::vector<KeyframeDatabase::SharedWords> KeyframeDatabase::sharedWordCounts(const BowVector &bow) const
 {
-  std::unordered_map<KeyframeId, int> common;
+  std::vector<int> counts(m_slots.size(), 0);
+  std::vector<SharedWords> shared;
   for (const BowEntry &e : bow) {
     const auto word = m_index.find(e.wordId); // absent: no keyframe holds it (or another vocabulary's word)
     if (word == m_index.end()) {
       continue;
     }
-    for (std::uint32_t h = word->second; h != kNoHolder; h = m_holders[h].next) {
-      ++common[m_holders[h].id];
+    const Word &w = word->second;
+    if (w.list != kNoList) {
+      for (const std::uint32_t slot : m_lists[w.list]) {
+        if (counts[slot]++ == 0) {
+          shared.push_back({slot, 0});
+        }
+      }
+    }
+    for (std::uint32_t h = w.chain; h != kNoHolder; h = m_holders[h].next) {
+      const std::uint32_t slot = m_holders[h].slot;
+      if (counts[slot]++ == 0) {
+        shared.push_back({slot, 0});
+      }
     }
   }
-  return common;
+  for (SharedWords &s : shared) {
+    s.count = counts[s.slot];
+  }
+  return shared;
 }
 
 namespace
@@ -159,22 +244,21 @@ using Candidate = KeyframeDatabase::Candidate;
 using KeyframeId = KeyframeDatabase::KeyframeId;
 
 /*!
-  The largest count of shared words among the keyframes of \e common the query does not exclude (0: none). Asked in
-  decreasing count, so the exclusion rule runs on the few best keyframes, not on every keyframe sharing a word (a map
-  revisited lap after lap has thousands of those: the rule on each was a quarter of the query's time).
+  The largest count of shared words among the keyframes of \e byCount (count, keyframe) that the query does not
+  exclude (0: none). Taken from a heap in decreasing count, so the exclusion rule runs on the few best keyframes, not
+  on every keyframe sharing a word (a map revisited lap after lap has thousands of those: the rule on each was a
+  quarter of the query's time), and the thousands are not sorted either.
 */
-int largestCommonNotExcluded(const std::unordered_map<KeyframeId, int> &common, const KeyframeDatabase::Query &query)
+int largestCommonNotExcluded(std::vector<std::pair<int, KeyframeId>> byCount, const KeyframeDatabase::Query &query)
 {
-  std::vector<std::pair<int, KeyframeId>> byCount;
-  byCount.reserve(common.size());
-  for (const auto &kc : common) {
-    byCount.emplace_back(kc.second, kc.first);
-  }
-  std::sort(byCount.begin(), byCount.end(), std::greater<std::pair<int, KeyframeId>>());
-  for (const auto &entry : byCount) {
-    if (!query.excluded || !query.excluded(entry.second)) {
-      return entry.first;
+  std::make_heap(byCount.begin(), byCount.end());
+  while (!byCount.empty()) {
+    const std::pair<int, KeyframeId> best = byCount.front();
+    if (!query.excluded || !query.excluded(best.second)) {
+      return best.first;
     }
+    std::pop_heap(byCount.begin(), byCount.end());
+    byCount.pop_back();
   }
   return 0;
 }
@@ -248,8 +332,13 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
   // 1. Keyframes sharing words, with the count of shared words.
-  const std::unordered_map<KeyframeId, int> common = sharedWordCounts(bow);
-  const int maxCommon = largestCommonNotExcluded(common, query);
+  const std::vector<SharedWords> common = sharedWordCounts(bow);
+  std::vector<std::pair<int, KeyframeId>> byCount;
+  byCount.reserve(common.size());
+  for (const SharedWords &s : common) {
+    byCount.emplace_back(s.count, m_slots[s.slot].id);
+  }
+  const int maxCommon = largestCommonNotExcluded(std::move(byCount), query);
   if (maxCommon == 0) {
     return {};
   }
@@ -257,14 +346,15 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
   // 2. Score the keyframes sharing enough words.
   const double minCommon = m_options.minCommonWordsRatio * maxCommon;
   std::unordered_map<KeyframeId, Candidate> scored;
-  for (const auto &kc : common) {
-    if (kc.second < minCommon || (query.excluded && query.excluded(kc.first))) {
+  for (const SharedWords &s : common) {
+    const Slot &slot = m_slots[s.slot];
+    if (s.count < minCommon || (query.excluded && query.excluded(slot.id))) {
       continue;
     }
     Candidate c;
-    c.id = kc.first;
-    c.commonWords = kc.second;
-    c.score = OrbVocabulary::score(bow, m_vectors.at(kc.first));
+    c.id = slot.id;
+    c.commonWords = s.count;
+    c.score = OrbVocabulary::score(bow, *slot.bow);
     c.normalizedScore = query.expectedScore > 0.0 ? c.score / query.expectedScore : c.score;
     c.groupScore = c.score;
     if (c.score >= query.minScore && c.normalizedScore >= query.minNormalizedScore) {
@@ -280,6 +370,8 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
 double KeyframeDatabase::memoryBytes() const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  return m_heapBytes + vectorHeapBytes(m_holders) + hashBucketsHeapBytes(m_index) + hashBucketsHeapBytes(m_vectors);
+  return m_heapBytes + vectorHeapBytes(m_holders) + vectorHeapBytes(m_lists) + vectorHeapBytes(m_freeLists) +
+         vectorHeapBytes(m_slots) + vectorHeapBytes(m_freeSlots) + hashBucketsHeapBytes(m_index) +
+         hashBucketsHeapBytes(m_vectors);
 }
 } // namespace hslam

@@ -103,26 +103,58 @@ public:
   std::vector<double> scoresWith(const BowVector &bow, const std::vector<KeyframeId> &ids) const;
 
 private:
-  //! For every keyframe sharing a word with \e bow, how many it shares (caller holds the lock).
-  std::unordered_map<KeyframeId, int> sharedWordCounts(const BowVector &bow) const;
+  //! A keyframe's slot in m_slots and the count of words it shares with a query.
+  struct SharedWords {
+    std::uint32_t slot;
+    int count;
+  };
+  //! Every keyframe sharing a word with \e bow, with how many it shares (caller holds the lock).
+  std::vector<SharedWords> sharedWordCounts(const BowVector &bow) const;
+  struct Word;
+  //! The word's chained holders into a list of their own (caller holds the lock exclusively).
+  void moveChainToList(Word &word);
 
   KeyframeDatabaseOptions m_options;
   mutable std::shared_mutex m_mutex;
   std::size_t m_wordCount = 0; //!< words of the vocabulary
-  //! The inverted index: for each word some keyframe holds, the first of its holders in m_holders (a map: one empty
-  //! list per word of the shipped vocabulary's 413,203 took 10 MB before the first keyframe). The holders of a word
-  //! are a chain through m_holders (one pool for all words): a word held by one keyframe, the common case, costs a
-  //! hash node and 8 bytes instead of a hash node and a vector (80 bytes a word and keyframe before: most of what a
-  //! stored keyframe's place recognition took).
-  std::unordered_map<std::uint32_t, std::uint32_t> m_index;
+  //! The inverted index: for each word some keyframe holds, where its holders are (a map: one empty list per word of
+  //! the shipped vocabulary's 413,203 took 10 MB before the first keyframe). A word's first holders are a chain
+  //! through m_holders (one pool for all words): a word held by one keyframe, the common case, costs a hash node and
+  //! 8 bytes instead of a hash node and a vector (80 bytes a word and keyframe before: most of what a stored
+  //! keyframe's place recognition took). Past kChainedHolders holders the word's holders move to a list of their own
+  //! in m_lists, read in one sweep: walking long chains, whose links lie all over the pool, was three quarters of a
+  //! query at 10,000 stored keyframes of a room revisited lap after lap (every word held by hundreds of keyframes).
+  static constexpr std::uint32_t kNoHolder = 0xffffffffu;
+  struct Word {
+    std::uint32_t chain;       //!< first holder in m_holders, kNoHolder when none
+    std::uint32_t chainLength; //!< holders in the chain
+    std::uint32_t list;        //!< index in m_lists, kNoList while the word's holders are chained
+  };
   struct Holder {
-    KeyframeId id;
+    std::uint32_t slot; //!< the keyframe's slot in m_slots
     std::uint32_t next; //!< next holder of the same word in m_holders, kNoHolder at the end
   };
-  static constexpr std::uint32_t kNoHolder = 0xffffffffu;
+  static constexpr std::uint32_t kChainedHolders = 8;
+  static constexpr std::uint32_t kNoList = 0xffffffffu;
+  std::unordered_map<std::uint32_t, Word> m_index;
+  std::vector<std::vector<std::uint32_t>> m_lists; //!< keyframe slots holding a word, in no order
+  std::vector<std::uint32_t> m_freeLists;          //!< entries of m_lists released by remove()
   std::vector<Holder> m_holders;
   std::uint32_t m_freeHolders = kNoHolder; //!< chain of the entries of m_holders freed by remove()
-  std::unordered_map<KeyframeId, BowVector> m_vectors;
+  struct Stored {
+    BowVector bow;
+    std::uint32_t slot;
+  };
+  std::unordered_map<KeyframeId, Stored> m_vectors;
+  //! Keyframes by slot, a dense numbering reused after remove(): a query counts shared words in an array indexed by
+  //! slot instead of a hash map keyed by keyframe (a room revisited lap after lap has every word held by hundreds of
+  //! keyframes, and the hash map's counting was most of a query at thousands of stored keyframes).
+  struct Slot {
+    KeyframeId id = -1;
+    const BowVector *bow = nullptr; //!< in m_vectors (whose nodes do not move); null: a free slot
+  };
+  std::vector<Slot> m_slots;
+  std::vector<std::uint32_t> m_freeSlots;
   //! Heap bytes of the nodes of m_index and m_vectors and of the stored vectors, kept up to date by add(), remove() and
   //! clear(), so that memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5
   //! words.
