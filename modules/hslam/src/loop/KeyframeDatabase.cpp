@@ -54,31 +54,67 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
   for (const BowEntry &e : bow) {
     const auto inserted = m_index.try_emplace(e.wordId, Word{kNoHolder, 0, kNoList});
     m_heapBytes += inserted.second ? hashNodeHeapBytes<Index>() : 0.;
-    Word &word = inserted.first->second;
-    if (word.list == kNoList && word.chainLength == kChainedHolders) {
-      moveChainToList(word);
-    }
-    if (word.list != kNoList) {
-      std::vector<std::uint32_t> &list = m_lists[word.list];
-      const double before = vectorHeapBytes(list);
-      list.push_back(keyframeSlot);
-      m_heapBytes += vectorHeapBytes(list) - before;
-      continue;
-    }
-    std::uint32_t holder = m_freeHolders;
-    if (holder != kNoHolder) {
-      m_freeHolders = m_holders[holder].next;
-    } else {
-      holder = static_cast<std::uint32_t>(m_holders.size());
-      m_holders.push_back(Holder());
-    }
-    m_holders[holder] = {keyframeSlot, word.chain}; // in front of the word's chain
-    word.chain = holder;
-    ++word.chainLength;
+    addHolder(inserted.first->second, keyframeSlot);
   }
   const auto stored = m_vectors.emplace(id, Stored{bow, keyframeSlot}).first;
   m_slots[keyframeSlot] = {id, &stored->second.bow};
   m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second.bow);
+}
+
+void KeyframeDatabase::addHolder(Word &word, std::uint32_t keyframeSlot)
+{
+  if (word.list == kNoList && word.chainLength == kChainedHolders) {
+    moveChainToList(word);
+  }
+  if (word.list != kNoList) {
+    std::vector<std::uint32_t> &list = m_lists[word.list];
+    const double before = vectorHeapBytes(list);
+    list.push_back(keyframeSlot);
+    m_heapBytes += vectorHeapBytes(list) - before;
+    return;
+  }
+  std::uint32_t holder = m_freeHolders;
+  if (holder != kNoHolder) {
+    m_freeHolders = m_holders[holder].next;
+  } else {
+    holder = static_cast<std::uint32_t>(m_holders.size());
+    m_holders.push_back(Holder());
+  }
+  m_holders[holder] = {keyframeSlot, word.chain}; // in front of the word's chain
+  word.chain = holder;
+  ++word.chainLength;
+}
+
+void KeyframeDatabase::removeHolder(Word &word, std::uint32_t keyframeSlot)
+{
+  if (word.list != kNoList) {
+    // Out of the word's list (its order does not matter); an emptied list is released.
+    std::vector<std::uint32_t> &list = m_lists[word.list];
+    const auto at = std::find(list.begin(), list.end(), keyframeSlot);
+    if (at != list.end()) {
+      *at = list.back();
+      list.pop_back();
+    }
+    if (list.empty()) {
+      m_heapBytes -= vectorHeapBytes(list);
+      std::vector<std::uint32_t>().swap(list);
+      m_freeLists.push_back(word.list);
+      word.list = kNoList;
+    }
+    return;
+  }
+  // Unlink the keyframe's entry from the word's chain; it joins the free chain.
+  std::uint32_t *link = &word.chain;
+  while (*link != kNoHolder && m_holders[*link].slot != keyframeSlot) {
+    link = &m_holders[*link].next;
+  }
+  if (*link != kNoHolder) {
+    const std::uint32_t holder = *link;
+    *link = m_holders[holder].next;
+    m_holders[holder].next = m_freeHolders;
+    m_freeHolders = holder;
+    --word.chainLength;
+  }
 }
 
 void KeyframeDatabase::moveChainToList(Word &word)
@@ -118,34 +154,7 @@ bool KeyframeDatabase::remove(KeyframeId id)
       continue;
     }
     Word &w = word->second;
-    if (w.list != kNoList) {
-      // Out of the word's list (its order does not matter); an emptied list is released.
-      std::vector<std::uint32_t> &list = m_lists[w.list];
-      const auto at = std::find(list.begin(), list.end(), keyframeSlot);
-      if (at != list.end()) {
-        *at = list.back();
-        list.pop_back();
-      }
-      if (list.empty()) {
-        m_heapBytes -= vectorHeapBytes(list);
-        std::vector<std::uint32_t>().swap(list);
-        m_freeLists.push_back(w.list);
-        w.list = kNoList;
-      }
-    } else {
-      // Unlink the keyframe's entry from the word's chain; it joins the free chain.
-      std::uint32_t *link = &w.chain;
-      while (*link != kNoHolder && m_holders[*link].slot != keyframeSlot) {
-        link = &m_holders[*link].next;
-      }
-      if (*link != kNoHolder) {
-        const std::uint32_t holder = *link;
-        *link = m_holders[holder].next;
-        m_holders[holder].next = m_freeHolders;
-        m_freeHolders = holder;
-        --w.chainLength;
-      }
-    }
+    removeHolder(w, keyframeSlot);
     if (w.list == kNoList && w.chain == kNoHolder) {
       m_heapBytes -= hashNodeHeapBytes<decltype(m_index)>();
       m_index.erase(word);

@@ -111,6 +111,9 @@ private:
   //! Every keyframe sharing a word with \e bow, with how many it shares (caller holds the lock).
   std::vector<SharedWords> sharedWordCounts(const BowVector &bow) const;
   struct Word;
+  //! The keyframe of \e keyframeSlot as a holder of \e word, and out of it (caller holds the lock exclusively).
+  void addHolder(Word &word, std::uint32_t keyframeSlot);
+  void removeHolder(Word &word, std::uint32_t keyframeSlot);
   //! The word's chained holders into a list of their own (caller holds the lock exclusively).
   void moveChainToList(Word &word);
 
