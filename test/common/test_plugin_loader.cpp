@@ -80,8 +80,7 @@ TEST(PluginLoader, AnUnknownTagFamilyIsRefusedByThePlugin)
   // vpHSlamTag refuses unknown families itself; the plug-in checks again what reaches it from elsewhere.
   using Factory = AprilTagBackend *(*)(const char *, std::string *);
   std::string error;
-  const auto factory =
-      reinterpret_cast<Factory>(loadPluginSymbol(kTagPluginFile, kTagPluginFactory, "HSLAM_TAG_PLUGIN", error));
+  const auto factory = loadPluginFunction<Factory>(kTagPluginFile, kTagPluginFactory, "HSLAM_TAG_PLUGIN", error);
   ASSERT_NE(factory, nullptr) << error;
   EXPECT_EQ(factory("tag99h1", &error), nullptr);
   EXPECT_NE(error.find("unknown family 'tag99h1'"), std::string::npos) << error;

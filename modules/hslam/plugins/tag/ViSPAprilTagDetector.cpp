@@ -12,7 +12,6 @@
 #endif
 
 #include <exception>
-#include <memory>
 
 namespace
 {

@@ -28,6 +28,13 @@ namespace hslam
   loaded (the same answer on later calls).
 */
 VISP_EXPORT void *loadPluginSymbol(const char *file, const char *symbol, const char *envVariable, std::string &error);
+
+//! loadPluginSymbol() of a function entry point, as the function pointer type \e Function.
+template <typename Function>
+Function loadPluginFunction(const char *file, const char *symbol, const char *envVariable, std::string &error)
+{
+  return reinterpret_cast<Function>(loadPluginSymbol(file, symbol, envVariable, error));
+}
 } // namespace hslam
 
 #endif

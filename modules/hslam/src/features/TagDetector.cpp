@@ -24,8 +24,7 @@ TagDetector::TagDetector(const vpHSlamTag &tag, const vpCameraParameters &K) : m
 #else
   using Factory = AprilTagBackend *(*)(const char *, std::string *);
   std::string error;
-  const auto factory =
-      reinterpret_cast<Factory>(loadPluginSymbol(kTagPluginFile, kTagPluginFactory, "HSLAM_TAG_PLUGIN", error));
+  const auto factory = loadPluginFunction<Factory>(kTagPluginFile, kTagPluginFactory, "HSLAM_TAG_PLUGIN", error);
   if (factory == nullptr) {
     throw vpHSlamException(vpHSlamException::unsupported, "tag detector: tags are detected by a plug-in: " + error);
   }

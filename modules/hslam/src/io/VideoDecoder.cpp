@@ -21,8 +21,7 @@ using Factory = VideoDecoder *(*)(const char *, std::string *);
 std::unique_ptr<VideoDecoder> openVideoDecoder(const std::string &path)
 {
   std::string error;
-  const auto factory =
-      reinterpret_cast<Factory>(loadPluginSymbol(kVideoPluginFile, kVideoPluginFactory, "HSLAM_VIDEO_PLUGIN", error));
+  const auto factory = loadPluginFunction<Factory>(kVideoPluginFile, kVideoPluginFactory, "HSLAM_VIDEO_PLUGIN", error);
   if (factory == nullptr) {
     throw vpHSlamException(vpHSlamException::unsupported,
                            "cannot open video '" + path + "': video files are decoded by a plug-in: " + error);

@@ -16,6 +16,21 @@
 
 namespace hslam
 {
+namespace
+{
+//! An entry of \e pool to fill: one released before (listed in \e released), else a new one at its end.
+template <typename T> std::uint32_t takeEntry(std::vector<T> &pool, std::vector<std::uint32_t> &released)
+{
+  if (!released.empty()) {
+    const std::uint32_t entry = released.back();
+    released.pop_back();
+    return entry;
+  }
+  pool.emplace_back();
+  return static_cast<std::uint32_t>(pool.size() - 1);
+}
+} // namespace
+
 KeyframeDatabase::KeyframeDatabase(std::size_t wordCount, const KeyframeDatabaseOptions &options)
     : m_options(options), m_wordCount(wordCount)
 {
@@ -29,7 +44,7 @@ KeyframeDatabase::KeyframeDatabase(std::size_t wordCount, const KeyframeDatabase
 void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
 {
   std::unique_lock<std::shared_mutex> lock(m_mutex);
-  if (m_vectors.count(id)) {
+  if (m_slotOf.count(id)) {
     throw vpHSlamException(vpHSlamException::invalidArgument,
                            "keyframe database: keyframe " + std::to_string(id) + " is already present");
   }
@@ -42,23 +57,15 @@ void KeyframeDatabase::add(KeyframeId id, const BowVector &bow)
     }
   }
   using Index = decltype(m_index);
-  using Vectors = decltype(m_vectors);
-  std::uint32_t keyframeSlot;
-  if (!m_freeSlots.empty()) {
-    keyframeSlot = m_freeSlots.back();
-    m_freeSlots.pop_back();
-  } else {
-    keyframeSlot = static_cast<std::uint32_t>(m_slots.size());
-    m_slots.emplace_back();
-  }
+  const std::uint32_t keyframeSlot = takeEntry(m_slots, m_freeSlots);
   for (const BowEntry &e : bow) {
     const auto inserted = m_index.try_emplace(e.wordId, Word{kNoHolder, 0, kNoList});
     m_heapBytes += inserted.second ? hashNodeHeapBytes<Index>() : 0.;
     addHolder(inserted.first->second, keyframeSlot);
   }
-  const auto stored = m_vectors.emplace(id, Stored{bow, keyframeSlot}).first;
-  m_slots[keyframeSlot] = {id, &stored->second.bow};
-  m_heapBytes += hashNodeHeapBytes<Vectors>() + vectorHeapBytes(stored->second.bow);
+  m_slotOf.emplace(id, keyframeSlot);
+  m_slots[keyframeSlot] = {id, bow};
+  m_heapBytes += hashNodeHeapBytes<decltype(m_slotOf)>() + vectorHeapBytes(m_slots[keyframeSlot].bow);
 }
 
 void KeyframeDatabase::addHolder(Word &word, std::uint32_t keyframeSlot)
@@ -119,14 +126,7 @@ void KeyframeDatabase::removeHolder(Word &word, std::uint32_t keyframeSlot)
 
 void KeyframeDatabase::moveChainToList(Word &word)
 {
-  std::uint32_t list;
-  if (!m_freeLists.empty()) {
-    list = m_freeLists.back();
-    m_freeLists.pop_back();
-  } else {
-    list = static_cast<std::uint32_t>(m_lists.size());
-    m_lists.emplace_back();
-  }
+  const std::uint32_t list = takeEntry(m_lists, m_freeLists);
   std::vector<std::uint32_t> &holders = m_lists[list];
   holders.reserve(2 * kChainedHolders);
   for (std::uint32_t h = word.chain; h != kNoHolder;) {
@@ -143,12 +143,13 @@ void KeyframeDatabase::moveChainToList(Word &word)
 bool KeyframeDatabase::remove(KeyframeId id)
 {
   std::unique_lock<std::shared_mutex> lock(m_mutex);
-  const auto it = m_vectors.find(id);
-  if (it == m_vectors.end()) {
+  const auto it = m_slotOf.find(id);
+  if (it == m_slotOf.end()) {
     return false;
   }
-  const std::uint32_t keyframeSlot = it->second.slot;
-  for (const BowEntry &e : it->second.bow) {
+  const std::uint32_t keyframeSlot = it->second;
+  Slot &slot = m_slots[keyframeSlot];
+  for (const BowEntry &e : slot.bow) {
     const auto word = m_index.find(e.wordId);
     if (word == m_index.end()) {
       continue;
@@ -160,9 +161,9 @@ bool KeyframeDatabase::remove(KeyframeId id)
       m_index.erase(word);
     }
   }
-  m_heapBytes -= hashNodeHeapBytes<decltype(m_vectors)>() + vectorHeapBytes(it->second.bow);
-  m_vectors.erase(it);
-  m_slots[keyframeSlot] = Slot();
+  m_heapBytes -= hashNodeHeapBytes<decltype(m_slotOf)>() + vectorHeapBytes(slot.bow);
+  m_slotOf.erase(it);
+  slot = Slot();
   m_freeSlots.push_back(keyframeSlot);
   return true;
 }
@@ -175,7 +176,7 @@ void KeyframeDatabase::clear()
   m_freeHolders = kNoHolder;
   std::vector<std::vector<std::uint32_t>>().swap(m_lists);
   std::vector<std::uint32_t>().swap(m_freeLists);
-  decltype(m_vectors)().swap(m_vectors);
+  decltype(m_slotOf)().swap(m_slotOf);
   std::vector<Slot>().swap(m_slots);
   std::vector<std::uint32_t>().swap(m_freeSlots);
   m_heapBytes = 0.;
@@ -184,23 +185,23 @@ void KeyframeDatabase::clear()
 std::size_t KeyframeDatabase::size() const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  return m_vectors.size();
+  return m_slotOf.size();
 }
 
 bool KeyframeDatabase::contains(KeyframeId id) const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  return m_vectors.count(id) > 0;
+  return m_slotOf.count(id) > 0;
 }
 
 bool KeyframeDatabase::vectorOf(KeyframeId id, BowVector &bow) const
 {
   std::shared_lock<std::shared_mutex> lock(m_mutex);
-  const auto it = m_vectors.find(id);
-  if (it == m_vectors.end()) {
+  const auto it = m_slotOf.find(id);
+  if (it == m_slotOf.end()) {
     return false;
   }
-  bow = it->second.bow;
+  bow = m_slots[it->second].bow;
   return true;
 }
 
@@ -209,9 +210,9 @@ std::vector<double> KeyframeDatabase::scoresWith(const BowVector &bow, const std
   std::shared_lock<std::shared_mutex> lock(m_mutex);
   std::vector<double> scores;
   for (KeyframeId id : ids) {
-    const auto it = m_vectors.find(id);
-    if (it != m_vectors.end()) {
-      scores.push_back(OrbVocabulary::score(bow, it->second.bow));
+    const auto it = m_slotOf.find(id);
+    if (it != m_slotOf.end()) {
+      scores.push_back(OrbVocabulary::score(bow, m_slots[it->second].bow));
     }
   }
   return scores;
@@ -221,6 +222,11 @@ std::vector<KeyframeDatabase::SharedWords> KeyframeDatabase::sharedWordCounts(co
 {
   std::vector<int> counts(m_slots.size(), 0);
   std::vector<SharedWords> shared;
+  auto count = [&](std::uint32_t slot) {
+    if (counts[slot]++ == 0) {
+      shared.push_back({slot, 0});
+    }
+  };
   for (const BowEntry &e : bow) {
     const auto word = m_index.find(e.wordId); // absent: no keyframe holds it (or another vocabulary's word)
     if (word == m_index.end()) {
@@ -229,16 +235,11 @@ std::vector<KeyframeDatabase::SharedWords> KeyframeDatabase::sharedWordCounts(co
     const Word &w = word->second;
     if (w.list != kNoList) {
       for (const std::uint32_t slot : m_lists[w.list]) {
-        if (counts[slot]++ == 0) {
-          shared.push_back({slot, 0});
-        }
+        count(slot);
       }
     }
     for (std::uint32_t h = w.chain; h != kNoHolder; h = m_holders[h].next) {
-      const std::uint32_t slot = m_holders[h].slot;
-      if (counts[slot]++ == 0) {
-        shared.push_back({slot, 0});
-      }
+      count(m_holders[h].slot);
     }
   }
   for (SharedWords &s : shared) {
@@ -363,7 +364,7 @@ std::vector<KeyframeDatabase::Candidate> KeyframeDatabase::query(const BowVector
     Candidate c;
     c.id = slot.id;
     c.commonWords = s.count;
-    c.score = OrbVocabulary::score(bow, *slot.bow);
+    c.score = OrbVocabulary::score(bow, slot.bow);
     c.normalizedScore = query.expectedScore > 0.0 ? c.score / query.expectedScore : c.score;
     c.groupScore = c.score;
     if (c.score >= query.minScore && c.normalizedScore >= query.minNormalizedScore) {
@@ -381,6 +382,6 @@ double KeyframeDatabase::memoryBytes() const
   std::shared_lock<std::shared_mutex> lock(m_mutex);
   return m_heapBytes + vectorHeapBytes(m_holders) + vectorHeapBytes(m_lists) + vectorHeapBytes(m_freeLists) +
          vectorHeapBytes(m_slots) + vectorHeapBytes(m_freeSlots) + hashBucketsHeapBytes(m_index) +
-         hashBucketsHeapBytes(m_vectors);
+         hashBucketsHeapBytes(m_slotOf);
 }
 } // namespace hslam

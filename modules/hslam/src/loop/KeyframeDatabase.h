@@ -144,21 +144,17 @@ private:
   std::vector<std::uint32_t> m_freeLists;          //!< entries of m_lists released by remove()
   std::vector<Holder> m_holders;
   std::uint32_t m_freeHolders = kNoHolder; //!< chain of the entries of m_holders freed by remove()
-  struct Stored {
-    BowVector bow;
-    std::uint32_t slot;
-  };
-  std::unordered_map<KeyframeId, Stored> m_vectors;
   //! Keyframes by slot, a dense numbering reused after remove(): a query counts shared words in an array indexed by
   //! slot instead of a hash map keyed by keyframe (a room revisited lap after lap has every word held by hundreds of
   //! keyframes, and the hash map's counting was most of a query at thousands of stored keyframes).
   struct Slot {
-    KeyframeId id = -1;
-    const BowVector *bow = nullptr; //!< in m_vectors (whose nodes do not move); null: a free slot
+    KeyframeId id = -1; //!< -1 with an empty vector: a free slot
+    BowVector bow;
   };
   std::vector<Slot> m_slots;
+  std::unordered_map<KeyframeId, std::uint32_t> m_slotOf; //!< stored keyframe -> its slot
   std::vector<std::uint32_t> m_freeSlots;
-  //! Heap bytes of the nodes of m_index and m_vectors and of the stored vectors, kept up to date by add(), remove() and
+  //! Heap bytes of the nodes of m_index and m_slotOf and of the stored vectors, kept up to date by add(), remove() and
   //! clear(), so that memoryBytes() (called after every keyframe for the statistics) does not walk an index of 10^5
   //! words.
   double m_heapBytes = 0.;
