@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -214,6 +215,122 @@ TEST(GlobalMap, ReuseMatchingFindsProjectedCornersAndCarriesTheirDepth)
   // Absorbed points are not offered again.
   map.absorb(3, 0, GlobalPointState::reactivated);
   EXPECT_EQ(hslam::matchGlobalPoints(map, selected, target, options).size(), matches.size() - 1u);
+}
+
+//! The selection as the selector's comment defines it, every sample projected: the reference for its shortcuts.
+std::vector<int> selectByProjectingEverySample(const GlobalMap &map, const std::vector<int> &windowIds,
+                                               const hslam::ReuseTarget &target, int maxKeyframes)
+{
+  std::vector<std::pair<int, int>> scored;
+  for (const auto &entry : map.keyframes()) {
+    const GlobalKeyframe &kf = entry.second;
+    bool linked = false;
+    for (int w : windowIds) {
+      const std::vector<int> row = map.covisibleWith(w);
+      linked = linked || (std::find(row.begin(), row.end(), kf.id) != row.end() &&
+                          std::find(windowIds.begin(), windowIds.end(), kf.id) == windowIds.end());
+    }
+    int projected = 0, corner = 0;
+    for (const GlobalPoint &p : kf.points) {
+      if (p.state != GlobalPointState::stored || !p.hasOrb || (target.cornersOnly && !p.isCorner) ||
+          corner++ % 4 != 0 || !(p.idepth > 0.f)) {
+        continue;
+      }
+      const Eigen::Vector3d X =
+          target.cMw * kf.cMw.inverse() * target.K.unproject(p.u, p.v, static_cast<double>(p.idepth));
+      if (X.z() > 0.) {
+        const Eigen::Vector2d uv = target.K.project(X);
+        projected += (uv.x() >= 16. && uv.y() >= 16. && uv.x() < target.width - 16. && uv.y() < target.height - 16.);
+      }
+    }
+    if (kf.segment == target.segment && (projected >= 10 || (projected > 0 && linked))) {
+      scored.emplace_back(projected, kf.id);
+    }
+  }
+  std::sort(scored.begin(), scored.end(), [](const std::pair<int, int> &a, const std::pair<int, int> &b) {
+    return a.first != b.first ? a.first > b.first : a.second > b.second;
+  });
+  std::vector<int> out;
+  for (size_t i = 0; i < scored.size() && static_cast<int>(i) < maxKeyframes; ++i) {
+    out.push_back(scored[i].second);
+  }
+  return out;
+}
+
+TEST(GlobalMap, ReuseSelectorKeepingSamplesAnswersAsOneBuiltFresh)
+{
+  // ReuseKeyframeSelector keeps each stored keyframe's samples and skips keyframes whose samples' ball the target
+  // cannot see. Its answer must be that of projecting every sample for every target, also after the map changed
+  // under it: keyframes rescaled (loop correction), points absorbed (re-use), keyframes added, the map restored.
+  const PinholeIntrinsics K = hslam_test::vgaPinhole500();
+  std::mt19937 rng(11);
+  // Each keyframe's points fill a patch of its image at 2-3 m: balls small enough that many targets miss them.
+  std::uniform_real_distribution<double> pixel(0., 200.), pixelV(0., 150.), inv(1. / 3., 0.5), unit(-1., 1.);
+  auto randomPose = [&]() {
+    SE3d::Tangent xi;
+    xi << 2. * unit(rng), 0.3 * unit(rng), 2. * unit(rng), 0.2 * unit(rng), 3.1 * unit(rng), 0.2 * unit(rng);
+    return SE3d::exp(xi);
+  };
+  auto randomKeyframe = [&](int id) {
+    GlobalKeyframe kf;
+    kf.id = id;
+    kf.cMw = randomPose();
+    const double u0 = 440. * (0.5 + 0.5 * unit(rng)), v0 = 330. * (0.5 + 0.5 * unit(rng));
+    for (int i = 0; i < 120; ++i) {
+      // Even keyframes share their points with the window's keyframes (1000, 1001): one sample in view selects them.
+      GlobalPoint p = pointWithObservers(id % 2 == 0 ? std::vector<int>{1000, 1001} : std::vector<int>{});
+      p.u = static_cast<float>(u0 + pixel(rng));
+      p.v = static_cast<float>(v0 + pixelV(rng));
+      p.idepth = static_cast<float>(inv(rng));
+      p.hasOrb = true;
+      p.isCorner = i % 3 != 0;
+      kf.points.push_back(p);
+    }
+    return kf;
+  };
+  GlobalMap map;
+  int nextId = 0;
+  for (; nextId < 40; ++nextId) {
+    map.add(randomKeyframe(nextId));
+  }
+  hslam::ReuseKeyframeSelector selector;
+  hslam::ReuseTarget target;
+  target.K = K;
+  target.width = 640;
+  target.height = 480;
+  size_t selected = 0, left = 0;
+  for (int round = 0; round < 60; ++round) {
+    target.cMw = randomPose();
+    target.cornersOnly = round % 7 != 3;
+    const std::vector<int> window = {1000, 1001};
+    const std::vector<int> kept = selector.select(map, window, target, 12);
+    ASSERT_EQ(kept, selectByProjectingEverySample(map, window, target, 12)) << "round " << round;
+    ASSERT_EQ(kept, hslam::selectReuseKeyframes(map, window, target, 12)) << "round " << round;
+    selected += kept.size();
+    left += map.keyframes().size() - kept.size();
+    // The map changes between keyframes as it does in a run.
+    const int id = static_cast<int>(rng() % static_cast<unsigned>(nextId));
+    if (round % 3 == 0) {
+      map.applySimilarity(id, hslam::Sim3d(map.find(id)->cMw, 0.3 + 0.1 * (round % 20)));
+    } else if (round % 3 == 1) {
+      for (size_t i = 0; i < 40; ++i) {
+        map.absorb(id, (i * 7 + static_cast<size_t>(round)) % 120, GlobalPointState::fused);
+      }
+    } else {
+      map.add(randomKeyframe(nextId++));
+    }
+    if (round == 40) {
+      std::vector<GlobalKeyframe> keyframes;
+      for (int k = 0; k < 30; ++k) {
+        keyframes.push_back(randomKeyframe(k)); // the same ids, other points and poses
+      }
+      map.restore(keyframes, {});
+      nextId = 30;
+    }
+  }
+  // Both outcomes occur: the comparison is not between two empty selections.
+  EXPECT_GT(selected, 60u);
+  EXPECT_GT(left, 60u);
 }
 
 TEST(GlobalMap, StoredKeyframeCostsFarLessThanHalfAMegabyte)

@@ -75,13 +75,13 @@ std::vector<int> applyGlobalBundleJob(const GlobalBundleJob &job, GlobalMap &map
     return moved;
   }
   for (int id : job.keyframes) {
-    if (GlobalKeyframe *kf = map.find(id)) {
+    if (GlobalKeyframe *kf = map.findForChange(id)) {
       kf->cMw = job.problem.keyframe(id);
       moved.push_back(id);
     }
   }
   for (size_t k = 0; k < job.points.size(); ++k) {
-    GlobalKeyframe *kf = map.find(job.points[k].first);
+    GlobalKeyframe *kf = map.findForChange(job.points[k].first);
     if (!kf || job.points[k].second >= kf->points.size()) {
       continue;
     }

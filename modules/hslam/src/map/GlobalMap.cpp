@@ -41,6 +41,7 @@ bool GlobalMap::add(GlobalKeyframe keyframe)
 {
   const int id = keyframe.id;
   GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
+  kf.revision = m_nextRevision++;
   for (const GlobalPoint &p : kf.points) {
     if (p.state == GlobalPointState::stored) {
       countShared(p, id, +1);
@@ -55,6 +56,7 @@ void GlobalMap::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PoseP
   for (GlobalKeyframe &keyframe : keyframes) {
     const int id = keyframe.id;
     GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
+    kf.revision = m_nextRevision++;
     for (const GlobalPoint &p : kf.points) {
       if (p.state == GlobalPointState::stored) {
         countShared(p, id, +1);
@@ -94,7 +96,7 @@ void GlobalMap::addPosePoseEdge(const PosePoseEdge &edge)
 
 void GlobalMap::absorb(int keyframeId, size_t pointIndex, GlobalPointState state)
 {
-  GlobalKeyframe *kf = find(keyframeId);
+  GlobalKeyframe *kf = findForChange(keyframeId);
   if (!kf || pointIndex >= kf->points.size() || kf->points[pointIndex].state != GlobalPointState::stored) {
     return;
   }
@@ -108,7 +110,7 @@ void GlobalMap::absorb(int keyframeId, size_t pointIndex, GlobalPointState state
 
 void GlobalMap::addObservation(int keyframeId, size_t pointIndex, int observerId, float u, float v)
 {
-  GlobalKeyframe *kf = find(keyframeId);
+  GlobalKeyframe *kf = findKeepingRevision(keyframeId);
   if (!kf || pointIndex >= kf->points.size() || observerId == keyframeId) {
     return;
   }
@@ -126,7 +128,17 @@ void GlobalMap::addObservation(int keyframeId, size_t pointIndex, int observerId
   countShared(p, keyframeId, +1);
 }
 
-GlobalKeyframe *GlobalMap::find(int id)
+GlobalKeyframe *GlobalMap::findForChange(int id)
+{
+  auto it = m_keyframes.find(id);
+  if (it == m_keyframes.end()) {
+    return nullptr;
+  }
+  it->second.revision = m_nextRevision++;
+  return &it->second;
+}
+
+GlobalKeyframe *GlobalMap::findKeepingRevision(int id)
 {
   auto it = m_keyframes.find(id);
   return it == m_keyframes.end() ? nullptr : &it->second;
@@ -185,7 +197,7 @@ bool GlobalMap::isCulled(int id) const
 
 bool GlobalMap::applyCulling(int id)
 {
-  GlobalKeyframe *kf = find(id);
+  GlobalKeyframe *kf = findKeepingRevision(id);
   if (!kf || kf->culled) {
     return false;
   }
@@ -239,7 +251,7 @@ double GlobalMap::memoryBytes() const
 }
 bool GlobalMap::applySimilarity(int id, const Sim3d &Siw)
 {
-  GlobalKeyframe *g = find(id);
+  GlobalKeyframe *g = findForChange(id);
   if (!g) {
     return false;
   }

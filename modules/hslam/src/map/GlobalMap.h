@@ -102,6 +102,9 @@ struct GlobalKeyframe {
   AffineBrightness affine;
   std::vector<GlobalPoint> points;
   bool culled = false;
+  //! Set by GlobalMap whenever the keyframe may have changed (stored, restored, or reached through the non-const
+  //! find()): caches of its points (ReuseKeyframeSelector) compare it. Never saved; never repeated within a map.
+  uint64_t revision = 0;
 };
 
 //! Relative pose constraint between two keyframes.
@@ -185,7 +188,8 @@ public:
     What loop detection and the pose graph read, copied so that another thread can read it while this map changes.
   */
   GlobalMap graphCopy() const;
-  GlobalKeyframe *find(int id);
+  //! The stored keyframe \e id to change (nullptr when absent); it gets a new GlobalKeyframe::revision.
+  GlobalKeyframe *findForChange(int id);
   const GlobalKeyframe *find(int id) const;
   const std::map<int, GlobalKeyframe> &keyframes() const { return m_keyframes; }
   const std::vector<PosePoseEdge> &posePoseEdges() const { return m_posePose; }
@@ -208,6 +212,8 @@ public:
   double memoryBytes() const;
 
 private:
+  //! For changes the revision does not guard (observers, the culled flag): the points' positions and states stay.
+  GlobalKeyframe *findKeepingRevision(int id);
   void countShared(const GlobalPoint &p, int host, int sign);
   bool isCulled(int id) const;
 
@@ -218,6 +224,7 @@ private:
   std::map<int, std::map<int, int>> m_shared;
   std::vector<PosePoseEdge> m_posePose;
   int m_culled = 0;
+  uint64_t m_nextRevision = 1; //!< not reset by clear(): a revision is never given twice by one map
 };
 } // namespace hslam
 

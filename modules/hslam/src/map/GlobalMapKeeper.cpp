@@ -290,7 +290,7 @@ int GlobalMapKeeper::reuse(Keyframe &newest, const std::vector<KeyframePtr> &win
   const ReuseTarget target = makeReuseTarget(
       newest.frame->cMw, m_K0, m_width, m_height, m_segment, newest.immature,
       [](const ImmaturePoint &) { return true; }, keypointToImmature);
-  std::vector<int> searched = selectReuseKeyframes(m_map, windowIds, target, m_params.globalMap.reuseMaxKeyframes);
+  std::vector<int> searched = m_selector.select(m_map, windowIds, target, m_params.globalMap.reuseMaxKeyframes);
   if (seedKeyframe >= 0) {
     // The place a relocalisation found: its stored corners project into the keyframe, but spread over several
     // keyframes, each with too few to pass the overlap test alone (3-lap synthetic loop: 7 samples, 10 needed).
@@ -523,12 +523,14 @@ void GlobalMapKeeper::restore(std::vector<GlobalKeyframe> keyframes, std::vector
     lastSegment = std::max(lastSegment, kf.segment);
   }
   m_map.restore(std::move(keyframes), std::move(edges));
+  m_selector.clear();
   m_segment = std::max(m_segment, lastSegment + 1);
 }
 
 void GlobalMapKeeper::reset()
 {
   m_map.clear();
+  m_selector.clear();
   m_stats = Statistics();
   m_segment = 0;
 }

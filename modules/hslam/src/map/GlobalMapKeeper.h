@@ -103,6 +103,8 @@ public:
 
   GlobalMap &globalMap() { return m_map; }
   const GlobalMap &globalMap() const { return m_map; }
+  //! Bytes held: the map and what the keyframe selection keeps of it.
+  double memoryBytes() const { return m_map.memoryBytes() + m_selector.memoryBytes(); }
   int segment() const { return m_segment; }
   //! A new segment starts (tracking was lost); the stored keyframes stay.
   void newSegment() { ++m_segment; }
@@ -130,7 +132,8 @@ private:
   PinholeIntrinsics m_K0;
   int m_width, m_height;
   GlobalMap m_map;
-  int m_segment = 0; //!< segment of the keyframes being made
+  ReuseKeyframeSelector m_selector; //!< the stored keyframes searched at each keyframe (keeps their samples)
+  int m_segment = 0;                //!< segment of the keyframes being made
   Statistics m_stats;
 };
 } // namespace hslam

@@ -3,7 +3,10 @@
  */
 #include "map/GlobalPointReuse.h"
 
+#include "common/HeapBytes.h"
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <set>
 
@@ -18,25 +21,78 @@ constexpr int kMinProjectedSamples = 10;
 //! Projected points must land this far inside the image (ORB's patch needs room; so did the keypoints').
 constexpr double kBorderPx = 16.;
 
-bool projectStored(const SE3d &targetMhost, const PinholeIntrinsics &K, int width, int height, const GlobalPoint &p,
-                   double &u, double &v)
+//! A point in the target camera's frame lands in front of it and inside the image's border.
+bool projectsInside(const Eigen::Vector3d &X, const ReuseTarget &target)
 {
-  if (!(p.idepth > 0.f)) {
-    return false;
-  }
-  const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
-  const Eigen::Vector3d X = targetMhost * (ray / static_cast<double>(p.idepth));
   if (!(X.z() > 0.)) {
     return false;
   }
-  u = K.fx * X.x() / X.z() + K.cx;
-  v = K.fy * X.y() / X.z() + K.cy;
-  return u >= kBorderPx && v >= kBorderPx && u < width - kBorderPx && v < height - kBorderPx;
+  const PinholeIntrinsics &K = target.K;
+  const double u = K.fx * X.x() / X.z() + K.cx;
+  const double v = K.fy * X.y() / X.z() + K.cy;
+  return u >= kBorderPx && v >= kBorderPx && u < target.width - kBorderPx && v < target.height - kBorderPx;
 }
 } // namespace
 
-std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<int> &windowIds,
-                                      const ReuseTarget &target, int maxKeyframes)
+bool ReuseKeyframeSelector::mayProject(const Samples &samples, const SE3d &targetMhost, const ReuseTarget &target)
+{
+  // The samples lie in a ball; a ball behind the camera or wholly outside one side plane of the image's frustum (the
+  // border included) projects none of them. The radius is widened a little so that rounding never refuses a sample
+  // that the exact test would take.
+  const Eigen::Vector3d c = targetMhost * samples.centre;
+  const double r = samples.radius * (1. + 1e-6) + 1e-12;
+  if (c.z() + r <= 0.) {
+    return false;
+  }
+  const PinholeIntrinsics &K = target.K;
+  // u >= border  <=>  fx x - (border - cx) z >= 0 in front of the camera; likewise for the three other sides.
+  const std::array<Eigen::Vector3d, 4> planes = {
+      Eigen::Vector3d(K.fx, 0., K.cx - kBorderPx), Eigen::Vector3d(-K.fx, 0., target.width - kBorderPx - K.cx),
+      Eigen::Vector3d(0., K.fy, K.cy - kBorderPx), Eigen::Vector3d(0., -K.fy, target.height - kBorderPx - K.cy)};
+  for (const Eigen::Vector3d &n : planes) {
+    if (n.dot(c) + r * n.norm() < 0.) {
+      return false;
+    }
+  }
+  return true;
+}
+
+const ReuseKeyframeSelector::Samples &ReuseKeyframeSelector::samplesOf(const GlobalKeyframe &kf,
+                                                                       const PinholeIntrinsics &K, bool cornersOnly)
+{
+  Samples &s = m_samples[kf.id];
+  if (s.revision == kf.revision && s.cornersOnly == cornersOnly && s.K.fx == K.fx && s.K.fy == K.fy && s.K.cx == K.cx &&
+      s.K.cy == K.cy) {
+    return s;
+  }
+  s.revision = kf.revision;
+  s.cornersOnly = cornersOnly;
+  s.K = K;
+  s.points.clear();
+  size_t corner = 0;
+  for (const GlobalPoint &p : kf.points) {
+    if (p.state != GlobalPointState::stored || !p.hasOrb || (cornersOnly && !p.isCorner) ||
+        (corner++ % kSampleStride) != 0 || !(p.idepth > 0.f)) {
+      continue;
+    }
+    const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
+    s.points.push_back(ray / static_cast<double>(p.idepth));
+  }
+  s.points.shrink_to_fit();
+  s.centre.setZero();
+  for (const Eigen::Vector3d &X : s.points) {
+    s.centre += X;
+  }
+  s.centre /= std::max<double>(1., static_cast<double>(s.points.size()));
+  s.radius = 0.;
+  for (const Eigen::Vector3d &X : s.points) {
+    s.radius = std::max(s.radius, (X - s.centre).norm());
+  }
+  return s;
+}
+
+std::vector<int> ReuseKeyframeSelector::select(const GlobalMap &map, const std::vector<int> &windowIds,
+                                               const ReuseTarget &target, int maxKeyframes)
 {
   // The stored keyframes co-visible with the window: the window's own rows of the co-visibility graph. Every edge of
   // the map was walked before, 20 % of hslam_many_laps' time at 2,000 stored keyframes (the same set).
@@ -48,22 +104,23 @@ std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<in
       }
     }
   }
+  if (m_samples.size() > 2 * map.keyframes().size() + 64) {
+    m_samples.clear(); // keyframes that left the map (a reset, a loaded map): forget their samples
+  }
   std::vector<std::pair<int, int>> scored; // (projected samples, id)
   for (const auto &entry : map.keyframes()) {
     const GlobalKeyframe &kf = entry.second;
     if (kf.segment != target.segment) {
       continue;
     }
+    const Samples &samples = samplesOf(kf, target.K, target.cornersOnly);
     const SE3d targetMhost = target.cMw * kf.cMw.inverse();
+    if (samples.points.empty() || !mayProject(samples, targetMhost, target)) {
+      continue;
+    }
     int projected = 0;
-    size_t corner = 0;
-    for (const GlobalPoint &p : kf.points) {
-      if (p.state != GlobalPointState::stored || !p.hasOrb || (target.cornersOnly && !p.isCorner) ||
-          (corner++ % kSampleStride) != 0) {
-        continue;
-      }
-      double u, v;
-      projected += projectStored(targetMhost, target.K, target.width, target.height, p, u, v) ? 1 : 0;
+    for (const Eigen::Vector3d &hostX : samples.points) {
+      projected += projectsInside(targetMhost * hostX, target) ? 1 : 0;
     }
     if (projected >= kMinProjectedSamples || (projected > 0 && linked.count(kf.id))) {
       scored.emplace_back(projected, kf.id);
@@ -78,6 +135,23 @@ std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<in
     out.push_back(scored[i].second);
   }
   return out;
+}
+
+double ReuseKeyframeSelector::memoryBytes() const
+{
+  double bytes = hashBucketsHeapBytes(m_samples) +
+                 static_cast<double>(m_samples.size()) * hashNodeHeapBytes<decltype(m_samples)>();
+  for (const auto &entry : m_samples) {
+    bytes += vectorHeapBytes(entry.second.points);
+  }
+  return bytes;
+}
+
+std::vector<int> selectReuseKeyframes(const GlobalMap &map, const std::vector<int> &windowIds,
+                                      const ReuseTarget &target, int maxKeyframes)
+{
+  ReuseKeyframeSelector selector;
+  return selector.select(map, windowIds, target, maxKeyframes);
 }
 
 bool transferIdepth(const SE3d &targetMhost, const PinholeIntrinsics &K, double u, double v, double idepth, double var,

@@ -62,6 +62,7 @@ void LocalMapper::clear()
     m_loop->clear(); // loops stay within a segment: the old one's features are of no further use
   }
   m_keeper.newSegment(); // the global map keeps what the old segment stored; re-use stays within a segment
+  m_marginalizedCounted = false;
 }
 
 void LocalMapper::reset()

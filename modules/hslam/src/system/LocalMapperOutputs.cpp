@@ -63,13 +63,26 @@ double LocalMapper::windowMemoryBytes() const
   return m_window->memoryBytes();
 }
 
-double LocalMapper::marginalizedMemoryBytes() const
+double LocalMapper::marginalizedMemoryBytes(bool exact)
 {
-  double bytes = m_keeper.globalMap().memoryBytes() + loopMemoryBytes();
-  if (m_relocalization) {
-    bytes += m_relocalization->memoryBytes();
+  constexpr size_t kRecountEvery = 50; // a count is redone after a change of 1 / 50 of the stored keyframes
+  const size_t stored = m_keeper.globalMap().keyframes().size();
+  const size_t changed =
+      stored > m_countedStoredKeyframes ? stored - m_countedStoredKeyframes : m_countedStoredKeyframes - stored;
+  if (exact || !m_marginalizedCounted || changed * kRecountEvery >= std::max<size_t>(m_countedStoredKeyframes, 1)) {
+    double bytes = m_keeper.memoryBytes() + loopMemoryBytes();
+    if (m_relocalization) {
+      bytes += m_relocalization->memoryBytes();
+    }
+    m_countedMarginalizedBytes = bytes;
+    m_countedStoredKeyframes = stored;
+    m_marginalizedCounted = true;
+    return bytes;
   }
-  return bytes;
+  if (changed == 0) {
+    return m_countedMarginalizedBytes;
+  }
+  return m_countedMarginalizedBytes * static_cast<double>(stored) / static_cast<double>(m_countedStoredKeyframes);
 }
 
 SE3d LocalMapper::newestKeyframe_cMw() const
@@ -114,6 +127,7 @@ void LocalMapper::mapSnapshot(std::vector<GlobalKeyframe> &keyframes, std::vecto
 void LocalMapper::restoreMap(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
 {
   m_keeper.restore(std::move(keyframes), std::move(edges));
+  m_marginalizedCounted = false;
   if (m_relocalization) {
     m_relocalization->clear(); // a second load replaces the first: nothing of it stays searchable
   }

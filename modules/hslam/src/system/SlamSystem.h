@@ -169,6 +169,8 @@ private:
   double runJob(const MappingJob &job);
   //! After a keyframe (m_mapperMutex held): keyframe poses to the recorder, the next reference, the snapshot.
   void publishAfterKeyframe();
+  //! The memory statistics into the snapshot: counted, or estimated between counts (LocalMapper), or \e exact.
+  void publishMemory(bool exact);
   void mappingLoop();
   void stopMappingThread();
   void startMappingThread();

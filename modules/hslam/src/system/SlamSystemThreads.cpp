@@ -190,17 +190,28 @@ void SlamSystem::publishAfterKeyframe()
   }
   std::vector<Eigen::Vector3d> points;
   m_mapper->activePointsWorld(points);
+  {
+    std::lock_guard<std::mutex> lock(m_snapshotMutex);
+    m_snapshotPoints.swap(points);
+    m_snapshotImmature = static_cast<unsigned int>(m_mapper->immaturePointCount());
+    m_snapshotReuse = m_mapper->reuseStatistics();
+    m_snapshotLoopStats = m_mapper->loopStatistics();
+  }
+  publishMemory(false);
+}
+
+void SlamSystem::publishMemory(bool exact)
+{
+  // Counted outside the snapshot's lock: the tracking thread reads the statistics meanwhile.
+  const double marginalizedBytes = m_mapper->marginalizedMemoryBytes(exact);
+  const double windowBytes = m_mapper->windowMemoryBytes();
+  const unsigned int held = static_cast<unsigned int>(m_mapper->keyframesHeld());
+  const double descriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
   std::lock_guard<std::mutex> lock(m_snapshotMutex);
-  m_snapshotPoints.swap(points);
-  m_snapshotImmature = static_cast<unsigned int>(m_mapper->immaturePointCount());
-  // The stored map is walked once per keyframe (its points' observer lists).
-  const double marginalizedBytes = m_mapper->marginalizedMemoryBytes();
-  m_snapshotMemoryMb = (m_mapper->windowMemoryBytes() + marginalizedBytes) / kBytesPerMegabyte;
-  m_snapshotKeyframesHeld = static_cast<unsigned int>(m_mapper->keyframesHeld());
-  m_snapshotDescriptorKb = m_mapper->descriptorBytesPerKeyframe() / 1024.;
+  m_snapshotMemoryMb = (windowBytes + marginalizedBytes) / kBytesPerMegabyte;
+  m_snapshotKeyframesHeld = held;
+  m_snapshotDescriptorKb = descriptorKb;
   m_snapshotMarginalizedMb = marginalizedBytes / kBytesPerMegabyte;
-  m_snapshotReuse = m_mapper->reuseStatistics();
-  m_snapshotLoopStats = m_mapper->loopStatistics();
 }
 
 void SlamSystem::finishBackgroundWork()
@@ -210,6 +221,7 @@ void SlamSystem::finishBackgroundWork()
   if (m_mapper->collectGlobalBundleAdjustment(true)) {
     publishAfterKeyframe();
   }
+  publishMemory(true); // between keyframes the memory is an estimate (LocalMapper::marginalizedMemoryBytes)
 }
 
 void SlamSystem::synchronize()
