@@ -328,6 +328,11 @@ TEST(GlobalMap, ReuseSelectorKeepingSamplesAnswersAsOneBuiltFresh)
       nextId = 30;
     }
   }
+  size_t points = 0;
+  for (const auto &entry : map.keyframes()) {
+    points += entry.second.points.size();
+  }
+  EXPECT_EQ(map.pointCount(), points); // kept as keyframes are stored and restored
   // Both outcomes occur: the comparison is not between two empty selections.
   EXPECT_GT(selected, 60u);
   EXPECT_GT(left, 60u);

@@ -18,6 +18,7 @@ void GlobalMap::clear()
   m_shared.clear();
   m_posePose.clear();
   m_culled = 0;
+  m_pointCount = 0;
 }
 
 void GlobalMap::countShared(const GlobalPoint &p, int host, int sign)
@@ -40,8 +41,11 @@ void GlobalMap::countShared(const GlobalPoint &p, int host, int sign)
 bool GlobalMap::add(GlobalKeyframe keyframe)
 {
   const int id = keyframe.id;
+  const auto before = m_keyframes.find(id);
+  m_pointCount -= before == m_keyframes.end() ? 0 : before->second.points.size();
   GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
   kf.revision = m_nextRevision++;
+  m_pointCount += kf.points.size();
   for (const GlobalPoint &p : kf.points) {
     if (p.state == GlobalPointState::stored) {
       countShared(p, id, +1);
@@ -55,8 +59,11 @@ void GlobalMap::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PoseP
   clear();
   for (GlobalKeyframe &keyframe : keyframes) {
     const int id = keyframe.id;
+    const auto before = m_keyframes.find(id);
+    m_pointCount -= before == m_keyframes.end() ? 0 : before->second.points.size();
     GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
     kf.revision = m_nextRevision++;
+    m_pointCount += kf.points.size();
     for (const GlobalPoint &p : kf.points) {
       if (p.state == GlobalPointState::stored) {
         countShared(p, id, +1);
@@ -222,15 +229,6 @@ bool GlobalMap::applyCulling(int id)
   kf->culled = true;
   ++m_culled;
   return true;
-}
-
-size_t GlobalMap::pointCount() const
-{
-  size_t n = 0;
-  for (const auto &k : m_keyframes) {
-    n += k.second.points.size();
-  }
-  return n;
 }
 
 double GlobalMap::memoryBytes() const

@@ -207,7 +207,8 @@ public:
   bool applyCulling(int id);
 
   int culledCount() const { return m_culled; }
-  size_t pointCount() const;
+  //! Points hosted by the stored keyframes, whatever their state (kept as keyframes are stored, not counted).
+  size_t pointCount() const { return m_pointCount; }
   //! Bytes held: keyframes, points (with their observer lists), counts and edges.
   double memoryBytes() const;
 
@@ -225,6 +226,7 @@ private:
   std::vector<PosePoseEdge> m_posePose;
   int m_culled = 0;
   uint64_t m_nextRevision = 1; //!< not reset by clear(): a revision is never given twice by one map
+  size_t m_pointCount = 0;
 };
 } // namespace hslam
 

@@ -184,7 +184,8 @@ public:
   void mapPointsWorld(std::vector<Eigen::Vector3d> &points, std::vector<int> &status) const;
 
   // ---- relocalisation (only with a vocabulary)
-  //! Memory the descriptors add to a keyframe (point descriptors, BoW vector, stored points), bytes; 0 without.
+  //! Memory the descriptors add to a keyframe (point descriptors, BoW vector, stored points), bytes; 0 without. The
+  //! relocalisation index's share is that of the last count of marginalizedMemoryBytes().
   double descriptorBytesPerKeyframe() const;
   //! True when keyframes are indexed for relocalisation.
   bool indexesKeyframes() const;

@@ -71,8 +71,12 @@ double LocalMapper::marginalizedMemoryBytes(bool exact)
       stored > m_countedStoredKeyframes ? stored - m_countedStoredKeyframes : m_countedStoredKeyframes - stored;
   if (exact || !m_marginalizedCounted || changed * kRecountEvery >= std::max<size_t>(m_countedStoredKeyframes, 1)) {
     double bytes = m_keeper.memoryBytes() + loopMemoryBytes();
+    m_countedRelocalizationBytesPerKeyframe = 0.;
     if (m_relocalization) {
-      bytes += m_relocalization->memoryBytes();
+      const double relocalization = m_relocalization->memoryBytes();
+      bytes += relocalization;
+      m_countedRelocalizationBytesPerKeyframe =
+          m_relocalization->size() > 0 ? relocalization / static_cast<double>(m_relocalization->size()) : 0.;
     }
     m_countedMarginalizedBytes = bytes;
     m_countedStoredKeyframes = stored;
@@ -147,11 +151,8 @@ double LocalMapper::descriptorBytesPerKeyframe() const
   for (const KeyframePtr &kf : m_window->keyframes()) {
     points += static_cast<double>(kf->points.size() + kf->immature.size());
   }
-  double bytes = kPerPoint * points / static_cast<double>(m_window->size());
-  if (m_relocalization && m_relocalization->size() > 0) {
-    bytes += m_relocalization->memoryBytes() / static_cast<double>(m_relocalization->size());
-  }
-  return bytes;
+  // The relocalisation index's share as of the last count of marginalizedMemoryBytes() (walking it is O(map)).
+  return kPerPoint * points / static_cast<double>(m_window->size()) + m_countedRelocalizationBytesPerKeyframe;
 }
 
 bool LocalMapper::indexesKeyframes() const
