@@ -263,9 +263,10 @@ private:
   //! Loop closure (slam mode with a vocabulary). clear() empties it (loops stay within a segment); its statistics
   //! count the whole run until reset().
   std::unique_ptr<LoopCloser> m_loop;
-  std::vector<KeyframeState> m_marginalizedStates; //!< keyframes that left since the last report
-  double m_countedMarginalizedBytes = 0.;          //!< marginalizedMemoryBytes() at its last count
-  size_t m_countedStoredKeyframes = 0;             //!< stored keyframes at that count
+  std::vector<KeyframeState> m_marginalizedStates;     //!< keyframes that left since the last report
+  double m_countedMarginalizedBytes = 0.;              //!< marginalizedMemoryBytes() at its last count
+  size_t m_countedStoredKeyframes = 0;                 //!< stored keyframes at that count
+  double m_countedRelocalizationBytesPerKeyframe = 0.; //!< the relocalisation index per keyframe at that count
   bool m_marginalizedCounted = false;
   std::atomic<bool> m_correctingLoop{false};
 };
