@@ -38,7 +38,7 @@ void GlobalMap::countShared(const GlobalPoint &p, int host, int sign)
   }
 }
 
-bool GlobalMap::add(GlobalKeyframe keyframe)
+GlobalKeyframe &GlobalMap::store(GlobalKeyframe keyframe)
 {
   const int id = keyframe.id;
   const auto before = m_keyframes.find(id);
@@ -51,25 +51,19 @@ bool GlobalMap::add(GlobalKeyframe keyframe)
       countShared(p, id, +1);
     }
   }
-  return applyCulling(id);
+  return kf;
+}
+
+bool GlobalMap::add(GlobalKeyframe keyframe)
+{
+  return applyCulling(store(std::move(keyframe)).id);
 }
 
 void GlobalMap::restore(std::vector<GlobalKeyframe> keyframes, std::vector<PosePoseEdge> edges)
 {
   clear();
   for (GlobalKeyframe &keyframe : keyframes) {
-    const int id = keyframe.id;
-    const auto before = m_keyframes.find(id);
-    m_pointCount -= before == m_keyframes.end() ? 0 : before->second.points.size();
-    GlobalKeyframe &kf = m_keyframes[id] = std::move(keyframe);
-    kf.revision = m_nextRevision++;
-    m_pointCount += kf.points.size();
-    for (const GlobalPoint &p : kf.points) {
-      if (p.state == GlobalPointState::stored) {
-        countShared(p, id, +1);
-      }
-    }
-    m_culled += kf.culled ? 1 : 0;
+    m_culled += store(std::move(keyframe)).culled ? 1 : 0;
   }
   m_posePose = std::move(edges);
 }

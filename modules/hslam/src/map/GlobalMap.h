@@ -102,8 +102,8 @@ struct GlobalKeyframe {
   AffineBrightness affine;
   std::vector<GlobalPoint> points;
   bool culled = false;
-  //! Set by GlobalMap whenever the keyframe may have changed (stored, restored, or reached through the non-const
-  //! find()): caches of its points (ReuseKeyframeSelector) compare it. Never saved; never repeated within a map.
+  //! Set by GlobalMap whenever the keyframe may have changed (stored, restored, or reached through
+  //! findForChange()): caches of its points (ReuseKeyframeSelector) compare it. Never saved; never repeated in a map.
   uint64_t revision = 0;
 };
 
@@ -215,6 +215,8 @@ public:
 private:
   //! For changes the revision does not guard (observers, the culled flag): the points' positions and states stay.
   GlobalKeyframe *findKeepingRevision(int id);
+  //! \e keyframe into the map (replacing one of its id): a new revision, its points and co-visibility counted.
+  GlobalKeyframe &store(GlobalKeyframe keyframe);
   void countShared(const GlobalPoint &p, int host, int sign);
   bool isCulled(int id) const;
 

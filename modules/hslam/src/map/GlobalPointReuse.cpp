@@ -27,10 +27,9 @@ bool projectsInside(const Eigen::Vector3d &X, const ReuseTarget &target)
   if (!(X.z() > 0.)) {
     return false;
   }
-  const PinholeIntrinsics &K = target.K;
-  const double u = K.fx * X.x() / X.z() + K.cx;
-  const double v = K.fy * X.y() / X.z() + K.cy;
-  return u >= kBorderPx && v >= kBorderPx && u < target.width - kBorderPx && v < target.height - kBorderPx;
+  const Eigen::Vector2d uv = target.K.project(X);
+  return uv.x() >= kBorderPx && uv.y() >= kBorderPx && uv.x() < target.width - kBorderPx &&
+         uv.y() < target.height - kBorderPx;
 }
 } // namespace
 
@@ -75,8 +74,7 @@ const ReuseKeyframeSelector::Samples &ReuseKeyframeSelector::samplesOf(const Glo
         (corner++ % kSampleStride) != 0 || !(p.idepth > 0.f)) {
       continue;
     }
-    const Eigen::Vector3d ray((p.u - K.cx) / K.fx, (p.v - K.cy) / K.fy, 1.);
-    s.points.push_back(ray / static_cast<double>(p.idepth));
+    s.points.push_back(K.unproject(p.u, p.v, static_cast<double>(p.idepth)));
   }
   s.points.shrink_to_fit();
   s.centre.setZero();

@@ -83,10 +83,10 @@ double LocalMapper::marginalizedMemoryBytes(bool exact)
     m_marginalizedCounted = true;
     return bytes;
   }
-  if (changed == 0) {
-    return m_countedMarginalizedBytes;
-  }
-  return m_countedMarginalizedBytes * static_cast<double>(stored) / static_cast<double>(m_countedStoredKeyframes);
+  // Here a count of no stored keyframe means none is stored now either (any change forces a count).
+  return m_countedStoredKeyframes == 0
+             ? m_countedMarginalizedBytes
+             : m_countedMarginalizedBytes * static_cast<double>(stored) / static_cast<double>(m_countedStoredKeyframes);
 }
 
 SE3d LocalMapper::newestKeyframe_cMw() const
