@@ -345,7 +345,7 @@ void printSummary(const Arguments &args, const vpHSlamParameters &params, const 
             << std::setprecision(1) << peakRssMb() << " MB" << std::endl;
   if (args.tag.isSet()) {
     std::cout << "tag " << args.tag.toString() << ": " << s.tagSightings << " sightings in keyframes, "
-              << s.tagSightingsUsed << " kept; ";
+              << s.tagSightingsUsed << " kept, " << s.tagCorrections << " map corrections on seeing it again; ";
     if (s.metric) {
       std::cout << "outputs in metres" << (args.tag.hasId() ? " and in the tag's frame" : "") << " (scale "
                 << std::setprecision(4) << s.metricScale << " m per map unit, +- " << std::setprecision(2)

@@ -422,7 +422,7 @@ struct LapRun {
     loop.SkeyframeCandidate = Sim3d(truth(keyframe) * truth(loop.candidate).inverse(), 1.);
     std::vector<hslam::PoseGraphEdge> constraints;
     std::vector<std::pair<int, Sim3d>> solution;
-    EXPECT_TRUE(hslam::solveLoopCorrection(map, 0, window, constraints, loop, solution, maxFree));
+    EXPECT_TRUE(hslam::solveLoopCorrection(map, 0, window, constraints, loop, solution, {}, maxFree));
     return solution;
   }
 };

@@ -228,3 +228,33 @@ TEST(MetricFrame, TheTagsDepthInTheMapFixesTheScaleAndFollowsALoopCorrection)
   ASSERT_TRUE(frame.current().metric);
   EXPECT_NEAR(frame.current().scale / (2. * trueSimilarity().scale()), 1., 0.003);
 }
+
+TEST(MetricFrame, ATagSeenAgainAsksForACorrectionAtTheFirstAndThirdKeyframeOfTheRevisit)
+{
+  vpHSlamParameters::TagFrame options;
+  MetricFrame frame(vpHSlamTag("tag36h11", 0.16, 0), options);
+  TagSighting s;
+  s.id = 0;
+  const auto see = [&](int keyframe) { frame.addSightings(keyframe, 0, {s}); };
+  for (int k : {0, 1, 2}) { // the first visit: nothing to correct
+    see(k);
+    EXPECT_FALSE(frame.seenAgain(k)) << k;
+  }
+  see(5); // the camera looked away for two keyframes: the same visit
+  EXPECT_FALSE(frame.seenAgain(5));
+  const int back = 5 + MetricFrame::kRevisitKeyframes; // away long enough: a revisit
+  for (int k = back; k < back + 5; ++k) {
+    see(k);
+    EXPECT_EQ(frame.seenAgain(k), k == back || k == back + 2) << k;
+  }
+  EXPECT_FALSE(frame.seenAgain(back + 10)); // a keyframe that saw nothing
+  // Another tag seen for the first time is no revisit; sightings of another segment do not count.
+  s.id = 1;
+  see(back + 30);
+  EXPECT_FALSE(frame.seenAgain(back + 30));
+  frame.startSegment(1);
+  s.id = 0;
+  frame.addSightings(back + 60, 1, {s});
+  EXPECT_FALSE(frame.seenAgain(back + 60));
+  EXPECT_EQ(frame.segmentSightings().size(), 1u);
+}

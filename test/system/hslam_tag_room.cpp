@@ -2,7 +2,7 @@
 // three systems with the given point budget and mode, deterministic, printed as one line of key=value pairs per
 // system (variant both, first-lap, none).
 //
-//   hslam_tag_room [--budget 500] [--mode slam] [--debug]
+//   hslam_tag_room [--budget 500] [--mode slam] [--real-time] [--debug]
 //
 // Output per variant: metric, sightings, kept, scale_error (|s - 1| of the Sim(3) alignment onto the truth),
 // frame_offset_m, frame_deg, ate_unaligned_m (no alignment), ate_sim3_m, tracked, loops, tag_ms (detection per
@@ -20,17 +20,21 @@ int main(int argc, char **argv)
 {
   int budget = 0;
   std::string mode;
+  bool realTime = false;
   for (int k = 1; k < argc; ++k) {
     const std::string arg = argv[k];
     if (arg == "--budget" && k + 1 < argc) {
       budget = std::atoi(argv[++k]);
     } else if (arg == "--mode" && k + 1 < argc) {
       mode = argv[++k];
+    } else if (arg == "--real-time") {
+      realTime = true;
     } else if (arg == "--debug") {
       vpHSlamLog::setSink(vpHSlamLog::stderrSink());
       vpHSlamLog::setLevel(vpHSlamLog::debug);
     } else {
-      std::cerr << "usage: " << argv[0] << " [--budget POINTS] [--mode vo-strict|vo-reuse|slam] [--debug]\n";
+      std::cerr << "usage: " << argv[0]
+                << " [--budget POINTS] [--mode vo-strict|vo-reuse|slam] [--real-time] [--debug]\n";
       return EXIT_FAILURE;
     }
   }
@@ -40,7 +44,7 @@ int main(int argc, char **argv)
   }
   try {
     vpHSlamParameters params;
-    params.system.deterministic = true;
+    params.system.deterministic = !realTime; // real time: mapping and loop closure on their threads
     if (budget > 0) {
       params.features.desiredImmatureDensity = budget;
     }
@@ -58,7 +62,8 @@ int main(int argc, char **argv)
                 << " sightings=" << s.tagSightings << " kept=" << s.tagSightingsUsed << " scale_error=" << e.scale
                 << " frame_offset_m=" << e.metres << " frame_deg=" << e.degrees << " ate_unaligned_m=" << e.ateUnaligned
                 << " ate_sim3_m=" << e.ateSim3 << " tracked=" << s.trackedFrames << " loops=" << s.loopsCorrected
-                << " tag_ms=" << s.tagDetectionMsMean << " tracking_ms_median=" << s.trackingMsMedian << std::endl;
+                << " tag_corrections=" << s.tagCorrections << " tag_ms=" << s.tagDetectionMsMean
+                << " tracking_ms_median=" << s.trackingMsMedian << std::endl;
     }
   } catch (const vpException &e) {
     std::cerr << "error: " << e.getStringMessage() << std::endl;

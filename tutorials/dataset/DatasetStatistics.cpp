@@ -58,6 +58,7 @@ void writeLoopAndTagFields(std::ostream &out, const vpHSlam::Statistics &s, cons
       << "  \"metric\": " << (s.metric ? "true" : "false") << ",\n"
       << "  \"tag_sightings\": " << s.tagSightings << ",\n"
       << "  \"tag_sightings_used\": " << s.tagSightingsUsed << ",\n"
+      << "  \"tag_corrections\": " << s.tagCorrections << ",\n"
       << "  \"metric_scale\": " << jsonNumber(s.metricScale) << ",\n"
       << "  \"metric_scale_uncertainty\": " << jsonNumber(s.metricScaleUncertainty) << ",\n"
       << "  \"tag_detection_ms_mean\": " << jsonNumber(s.tagDetectionMsMean) << ",\n";

@@ -103,7 +103,11 @@ bool LoopCloser::process(Work &work, Correction &correction)
   case Work::remove:
     dropKeyframe(work.id);
     return false;
+  case Work::newSightings:
+    m_landmarks = std::move(work.landmarks);
+    return false;
   case Work::query:
+  case Work::landmarkCorrection:
     break;
   }
   int solved = 0;
@@ -111,16 +115,20 @@ bool LoopCloser::process(Work &work, Correction &correction)
     std::lock_guard<std::mutex> lock(m_queueMutex);
     solved = m_correctionsSolved;
   }
-  // A copy made before the mapper applied every correction solved so far: its poses would undo them. Its keyframes
-  // stay pending for the next query.
+  // A copy made before the mapper applied every correction solved so far: its poses would undo them. A query's
+  // keyframes stay pending for the next query; a landmark's correction is dropped (the next sighting asks again).
   if (work.correctionsApplied != solved) {
     return false;
   }
-  if (!detect(work.graph, work.connected, correction.loop)) {
-    return false;
-  }
   const auto t0 = std::chrono::steady_clock::now();
-  const bool ok = correct(correction.loop, work.graph, work.windowPoses, correction.solution);
+  bool ok = false;
+  if (work.kind == Work::landmarkCorrection) {
+    correction.loop.keyframe = work.id;
+    correction.landmark = true;
+    ok = correctLandmarks(work.id, work.graph, work.windowPoses, correction.solution);
+  } else if (detect(work.graph, work.connected, correction.loop)) {
+    ok = correct(correction.loop, work.graph, work.windowPoses, correction.solution);
+  }
   correction.solveMs = msSince(t0);
   return ok;
 }
@@ -349,7 +357,7 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
   const GlobalKeyframe *g = map.find(loop.keyframe);
   bool ok = false;
   try {
-    ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution);
+    ok = g && solveLoopCorrection(map, g->segment, windowPoses, m_loopConstraints, loop, solution, m_landmarks);
     for (size_t i = 0; ok && i < solution.size(); ++i) {
       rescale(solution[i].first, solution[i].second.scale()); // the loop features follow their keyframe's map
     }
@@ -361,6 +369,50 @@ bool LoopCloser::correct(const DetectedLoop &loop, const GlobalMap &map, const s
     VP_HSLAM_LOG(vpHSlamLog::warning, "loop " << loop.keyframe << "-" << loop.candidate << " not corrected");
   }
   return ok;
+}
+
+void LoopCloser::setLandmarkSightings(LandmarkSightings landmarks)
+{
+  if (!m_thread.joinable()) {
+    m_landmarks = std::move(landmarks);
+    return;
+  }
+  Work work;
+  work.kind = Work::newSightings;
+  work.landmarks = std::move(landmarks);
+  enqueue(std::move(work));
+}
+
+bool LoopCloser::correctLandmarks(int keyframe, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
+                                  std::vector<std::pair<int, Sim3d>> &solution)
+{
+  const GlobalKeyframe *g = map.find(keyframe);
+  const int segment = g ? g->segment : m_segment; // the keyframe is usually still in the window
+  bool ok = false;
+  try {
+    ok = solveLandmarkCorrection(map, segment, windowPoses, m_loopConstraints, m_landmarks, solution);
+    for (size_t i = 0; ok && i < solution.size(); ++i) {
+      rescale(solution[i].first, solution[i].second.scale());
+    }
+  } catch (const vpHSlamException &e) { // nothing is changed before the pose graph succeeded
+    VP_HSLAM_LOG(vpHSlamLog::warning, "landmark correction at keyframe " << keyframe << ": " << e.getStringMessage());
+    ok = false;
+  }
+  return ok;
+}
+
+void LoopCloser::queueLandmarkCorrection(int keyframe, GlobalMap graph, std::map<int, SE3d> windowPoses)
+{
+  Work work;
+  work.kind = Work::landmarkCorrection;
+  work.id = keyframe;
+  work.graph = std::move(graph);
+  work.windowPoses = std::move(windowPoses);
+  {
+    std::lock_guard<std::mutex> lock(m_queueMutex);
+    work.correctionsApplied = m_correctionsTaken;
+  }
+  enqueue(std::move(work));
 }
 
 void LoopCloser::handOver(const Keyframe &kf, int segment, const std::vector<KeyframePtr> &window)
@@ -481,6 +533,7 @@ void LoopCloser::clear()
   m_keyframes.clear();
   m_pending.clear();
   m_loopConstraints.clear();
+  m_landmarks = LandmarkSightings();
   m_segment = 0;
   newSegment();
 }
@@ -516,9 +569,9 @@ LoopStatistics LoopCloser::statistics() const
   return s;
 }
 
-void LoopCloser::recordCorrectionApplied(double ms)
+void LoopCloser::recordCorrectionApplied(double ms, bool landmark)
 {
-  ++m_applied.corrected;
+  ++(landmark ? m_applied.landmarkCorrected : m_applied.corrected);
   m_applied.lastCorrectionMs = ms;
   m_applied.correctionMsMax = std::max(m_applied.correctionMsMax, ms);
 }

@@ -25,6 +25,10 @@
   loop.consistency consecutive queries; then LoopVerification.h decides, and a correction rotating the map by more
   than loop.maxRotationCorrectionDeg is refused (aliasing).
 
+  Landmarks seen in metres (tags, setLandmarkSightings()) are constraints of every correction's pose graph, and a
+  landmark seen again after the camera went away asks for a correction of its own (correctLandmarks(),
+  queueLandmarkCorrection(); loop/LoopCorrection.h), applied by the mapper as a loop's.
+
   Threading. Deterministic runs: not thread-safe; the mapping thread (the caller) owns it, and detection and
   correction run there after each keyframe (detect(), correct()), in order. Real time (startThread()): the
   component works on a thread of its own. The mapper's calls (handOver(), removeKeyframe(), queueQuery()) only queue
@@ -39,6 +43,7 @@
 
 #include "loop/GlobalBundleJob.h"
 #include "loop/KeyframeDatabase.h"
+#include "loop/LandmarkSightings.h"
 #include "loop/LoopDetector.h"
 #include "loop/LoopFeatures.h"
 #include "loop/LoopVerification.h"
@@ -75,6 +80,7 @@ struct LoopRecord {
 //! What the mapper applied of loop closure: correction times and global bundle adjustments.
 struct LoopApplyStatistics {
   int corrected = 0;               //!< loops whose pose-graph correction was applied to the map
+  int landmarkCorrected = 0;       //!< corrections asked by a landmark seen again, applied to the map
   double lastCorrectionMs = 0.;    //!< wall time of the last correction (pose graph, map update)
   double correctionMsMax = 0.;     //!< longest correction
   int globalBaStarted = 0;         //!< global bundle adjustments started (one after each correction)
@@ -108,7 +114,8 @@ class VISP_EXPORT LoopCloser
 public:
   //! A correction solved on the loop closer's thread, for the mapper to apply.
   struct Correction {
-    DetectedLoop loop;
+    DetectedLoop loop;                           //!< for a landmark's correction: keyframe, the one that saw it
+    bool landmark = false;                       //!< asked by a landmark seen again, not by a loop
     std::vector<std::pair<int, Sim3d>> solution; //!< the new S_iw of every stored keyframe of the segment
     double solveMs = 0.;                         //!< wall time of the pose graph on the thread
   };
@@ -167,6 +174,20 @@ public:
   bool correct(const DetectedLoop &loop, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
                std::vector<std::pair<int, Sim3d>> &solution);
   /*!
+    The landmarks seen in metres so far in the current segment (every correction's graph holds them from now on;
+    queued when threaded, in order with the other work).
+  */
+  void setLandmarkSightings(LandmarkSightings landmarks);
+  /*!
+    A landmark seen from keyframe \e keyframe (in the window) was seen before from stored keyframes: the pose graph
+    of its segment with the landmarks' sightings and no new loop (solveLandmarkCorrection()). On success \e solution
+    holds the new S_iw of every stored keyframe of the segment, as correct() gives it.
+  */
+  bool correctLandmarks(int keyframe, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
+                        std::vector<std::pair<int, Sim3d>> &solution);
+  //! Threaded: correctLandmarks() on \e graph (GlobalMap::graphCopy()); the mapper collects it (takeCorrection()).
+  void queueLandmarkCorrection(int keyframe, GlobalMap graph, std::map<int, SE3d> windowPoses);
+  /*!
     The global bundle adjustment after a correction (loop.globalBundleAdjustment): the problem of \e segment's stored
     keyframes and points (\e windowPoses held fixed), to run in order or in the background.
   */
@@ -190,8 +211,8 @@ public:
   double memoryBytes() const;
   //! Counters since the start (threaded: after the last work done).
   LoopStatistics statistics() const;
-  //! The mapper applied a correction in \e ms (on the thread, plus the pose graph's time there).
-  void recordCorrectionApplied(double ms);
+  //! The mapper applied a correction (\e landmark: a landmark's) in \e ms (on the thread, plus the pose graph's time).
+  void recordCorrectionApplied(double ms, bool landmark = false);
   //! The mapper wrote back (\e applied) or not a global bundle adjustment.
   void recordGlobalBundleAdjustment(const GlobalBundleSummary &summary, bool applied);
   void resetStatistics();
@@ -201,10 +222,11 @@ private:
     LoopKeyframe features;
     int segment = 0;
   };
-  //! Work queued for the thread: a hand-over, a removal or a query.
+  //! Work queued for the thread: a hand-over, a removal, a query, new landmark sightings or a landmark's correction.
   struct Work {
-    enum Kind { handOver, remove, query } kind = handOver;
-    int id = -1;
+    enum Kind { handOver, remove, query, newSightings, landmarkCorrection } kind = handOver;
+    int id = -1; //!< the keyframe handed over, removed, or that saw the landmark again
+    LandmarkSightings landmarks;
     int segment = 0;
     vpImage<unsigned char> image;
     std::vector<IdepthSample> samples;
@@ -242,7 +264,8 @@ private:
   int m_keyframeOfLastLoop = 0; //!< m_keyframesInSegment at the last loop (or the segment's start)
   //! Every corrected loop's edges (the measured one and its connections), kept for the next corrections.
   std::vector<PoseGraphEdge> m_loopConstraints;
-  LoopStatistics m_stats; //!< detection and correction counters (the thread's when threaded)
+  LandmarkSightings m_landmarks; //!< setLandmarkSightings()
+  LoopStatistics m_stats;        //!< detection and correction counters (the thread's when threaded)
   //! What the mapper applied (correction times, global bundle adjustments); the mapper's thread only.
   LoopApplyStatistics m_applied;
   //! Real time: the global bundle adjustment's thread.

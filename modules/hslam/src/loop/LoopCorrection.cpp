@@ -8,7 +8,9 @@
 #include <visp3/hslam/vpHSlamLog.h>
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
+#include <set>
 
 namespace hslam
 {
@@ -26,6 +28,27 @@ constexpr size_t kRevisitSpan = 50;
 constexpr size_t kMinRevisitTies = 20;
 //! Vertex id of the past, which moves as one.
 constexpr int kPastVertex = std::numeric_limits<int>::min();
+/*!
+  Standard deviations of a landmark sighting: the tag detector's measured accuracy (docs/metric-tag-frame.md: 0.3 %
+  of the range, 1-1.5 degrees at 45-60 pixels; map/MetricFit.cpp uses the same).
+*/
+constexpr double kSightingRangeShare = 0.003;
+constexpr double kSightingRotationRad = 1.5 * M_PI / 180.;
+/*!
+  Weight of a whitened sighting against the graph's edges, whose information is the identity (radians, map units,
+  log-scale): as though an edge were good to about kSightingWeight radian and unit. Measured on the tag room over
+  five point budgets (docs/metric-tag-frame.md): 1e-1 let the detections' noise into the map (Sim(3)-aligned ATE
+  8-9.5 mm against 4.5-6 mm without the constraints), 1e-2 and 1e-3 both improved it (3.3-4.2 and 3.5-4.6 mm).
+  Beyond kSightingRobustScale standard deviations a sighting counts less and less
+  (Cauchy): a flipped pose of a small tag seen face-on is off by tens of degrees.
+*/
+constexpr double kSightingWeight = 1e-2;
+constexpr double kSightingRobustScale = 3.;
+//! Vertex id of landmark \e l (ids >= 0): below every keyframe id, above kPastVertex.
+int landmarkVertex(int l)
+{
+  return -2 - l;
+}
 
 //! The keyframes a correction's graph holds: the window's (fixed), the segment's stored ones (free), and among the
 //! latter, when the map is large and ties its past to its present, the older ones held together (the past).
@@ -176,6 +199,51 @@ public:
     }
   }
 
+  /*!
+    The sightings of held keyframes, one free vertex per landmark placed by its newest sighting. Returns how many
+    were added.
+  */
+  size_t addSightings(const LandmarkSightings &landmarks)
+  {
+    if (!landmarks.usable()) {
+      return 0;
+    }
+    size_t added = 0;
+    for (auto it = landmarks.sightings.rbegin(); it != landmarks.sightings.rend(); ++it) {
+      const LandmarkSighting &s = *it;
+      if (!m_keyframes.holds(s.keyframe) || s.landmark < 0 || !(s.range > 0.)) {
+        continue;
+      }
+      const int l = landmarkVertex(s.landmark);
+      if (!m_landmarks.count(l)) { // the newest sighting places it: S_lw = S_kl^-1 S_kw, the map's scale now
+        const Sim3d Skl(s.cMl.unitQuaternion(), s.cMl.translation() / landmarks.metresPerUnit,
+                        1. / landmarks.metresPerUnit);
+        m_graph.addVertex(l, Skl.inverse() * Sim3d(m_keyframes.pose(s.keyframe), 1.), false);
+        m_landmarks.insert(l);
+      }
+      PoseGraphSighting e;
+      e.landmark = l;
+      e.keyframe = s.keyframe;
+      if (m_keyframes.inPast(s.keyframe)) { // moves with the past: S_kw = S_kw0 T^-1
+        e.Akw = Sim3d(m_keyframes.pose(s.keyframe), 1.);
+        e.keyframe = kPastVertex;
+        if (!m_pastInGraph) {
+          m_graph.addVertex(kPastVertex, Sim3d(), false);
+          m_pastInGraph = true;
+        }
+      }
+      e.cMl = s.cMl;
+      e.sqrtInformation.setIdentity();
+      e.sqrtInformation.topLeftCorner<3, 3>() /= kSightingRotationRad;
+      e.sqrtInformation.bottomRightCorner<3, 3>() /= kSightingRangeShare * s.range;
+      e.robustScale = kSightingRobustScale;
+      e.weight = kSightingWeight;
+      m_graph.addSighting(e);
+      ++added;
+    }
+    return added;
+  }
+
   PoseGraph &graph() { return m_graph; }
   size_t pastKeyframes() const { return m_pastKeyframes; }
 
@@ -204,6 +272,7 @@ private:
   size_t m_pastKeyframes = 0;
   PoseGraph m_graph;
   bool m_pastInGraph = false;
+  std::set<int> m_landmarks; //!< landmark vertices added
 };
 
 /*!
@@ -268,7 +337,8 @@ PoseGraphEdge addLoopEdges(const SegmentKeyframes &keyframes, const DetectedLoop
 
 bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
                          std::vector<PoseGraphEdge> &constraints, const DetectedLoop &loop,
-                         std::vector<std::pair<int, Sim3d>> &solution, size_t maxFreeKeyframes)
+                         std::vector<std::pair<int, Sim3d>> &solution, const LandmarkSightings &landmarks,
+                         size_t maxFreeKeyframes)
 {
   solution.clear();
   SegmentKeyframes keyframes{map, segment, windowPoses};
@@ -277,6 +347,7 @@ bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, 
   CorrectionGraph correction(keyframes);
   addMeasuredEdges(keyframes, covisibility, constraints, correction);
   const PoseGraphEdge measured = addLoopEdges(keyframes, loop, correction);
+  correction.addSightings(landmarks);
   PoseGraph &graph = correction.graph();
   const PoseGraphSummary summary = graph.optimize(kLoopGraphIterations);
   if (!summary.usable || !correction.readSolution(solution)) {
@@ -297,6 +368,44 @@ bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, 
                                          << " past keyframes held together), " << graph.edgeCount() << " edges, "
                                          << summary.iterations << " iterations, cost " << summary.initialCost << " -> "
                                          << summary.finalCost << ", " << summary.ms << " ms");
+  return true;
+}
+
+bool solveLandmarkCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
+                             const std::vector<PoseGraphEdge> &constraints, const LandmarkSightings &landmarks,
+                             std::vector<std::pair<int, Sim3d>> &solution, size_t maxFreeKeyframes)
+{
+  solution.clear();
+  SegmentKeyframes keyframes{map, segment, windowPoses};
+  // Something to correct: a landmark seen from the window and from a stored keyframe of the segment.
+  std::set<int> seenNow, seenBefore;
+  for (const LandmarkSighting &s : landmarks.sightings) {
+    if (windowPoses.count(s.keyframe)) {
+      seenNow.insert(s.landmark);
+    } else if (keyframes.holds(s.keyframe)) {
+      seenBefore.insert(s.landmark);
+    }
+  }
+  const bool tied = std::any_of(seenNow.begin(), seenNow.end(), [&](int l) { return seenBefore.count(l) > 0; });
+  if (!landmarks.usable() || !tied) {
+    return false;
+  }
+  const std::vector<CovisibilityEdge> covisibility = map.covisibilityEdges();
+  keyframes.firstFree = firstFreeKeyframe(keyframes, covisibility, constraints, maxFreeKeyframes);
+  CorrectionGraph correction(keyframes);
+  addMeasuredEdges(keyframes, covisibility, constraints, correction);
+  const size_t sightings = correction.addSightings(landmarks);
+  PoseGraph &graph = correction.graph();
+  const PoseGraphSummary summary = graph.optimize(kLoopGraphIterations);
+  if (!summary.usable || !correction.readSolution(solution)) {
+    return false;
+  }
+  VP_HSLAM_LOG(vpHSlamLog::info, "landmark correction: pose graph "
+                                     << graph.vertexCount() << " vertices (" << correction.pastKeyframes()
+                                     << " past keyframes held together), " << graph.edgeCount() << " edges, "
+                                     << sightings << " sightings, " << summary.iterations << " iterations, cost "
+                                     << summary.initialCost << " -> " << summary.finalCost << ", " << summary.ms
+                                     << " ms");
   return true;
 }
 } // namespace hslam

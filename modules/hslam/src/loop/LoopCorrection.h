@@ -24,11 +24,17 @@
   the same at any size. A past that hangs from the present by the chain alone (one long loop, whose whole span must
   bend) stays free whatever its size: a chain costs 0.75 s at 10,000 keyframes.
 
+  Landmarks seen in metres (AprilTags, map/MetricFrame.h): every sighting of the segment's keyframes is a metric
+  constraint of the graph (PoseGraph.h), with one free vertex per landmark, in the loop's correction and in a
+  correction of its own when a landmark is seen again after the camera went away (solveLandmarkCorrection(): the
+  landmark is the loop, and its metres undo the scale drift between the two visits).
+
   Threading: a pure function of its inputs.
 */
 #ifndef HSLAM_LOOP_LOOP_CORRECTION_H
 #define HSLAM_LOOP_LOOP_CORRECTION_H
 
+#include "loop/LandmarkSightings.h"
 #include "loop/LoopCloser.h"
 #include "loop/PoseGraph.h"
 
@@ -55,7 +61,18 @@ constexpr size_t kLoopMaxFreeKeyframes = 500;
 VISP_EXPORT bool solveLoopCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
                                      std::vector<PoseGraphEdge> &constraints, const DetectedLoop &loop,
                                      std::vector<std::pair<int, Sim3d>> &solution,
+                                     const LandmarkSightings &landmarks = LandmarkSightings(),
                                      size_t maxFreeKeyframes = kLoopMaxFreeKeyframes);
+/*!
+  The correction a landmark seen again asks for: the graph of solveLoopCorrection() (the map's edges, \e constraints
+  of the loops before, the window fixed) with \e landmarks' sightings and no new loop. False (and \e solution empty)
+  when the sightings do not tie a stored keyframe of the segment to the window, or the optimisation failed.
+*/
+VISP_EXPORT bool solveLandmarkCorrection(const GlobalMap &map, int segment, const std::map<int, SE3d> &windowPoses,
+                                         const std::vector<PoseGraphEdge> &constraints,
+                                         const LandmarkSightings &landmarks,
+                                         std::vector<std::pair<int, Sim3d>> &solution,
+                                         size_t maxFreeKeyframes = kLoopMaxFreeKeyframes);
 } // namespace hslam
 
 #endif

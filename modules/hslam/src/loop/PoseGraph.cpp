@@ -38,6 +38,31 @@ struct RelativeSim3Error {
   Sim3d Sji; //!< the measurement
   Eigen::Matrix<double, 7, 7> W;
 };
+//! The residual of a metric sighting (PoseGraph.h): rotation and metric translation of A S_kw S_lw^-1 against cMl.
+struct MetricSightingError {
+  explicit MetricSightingError(const PoseGraphSighting &s)
+      : Akw(s.Akw), lRc(s.cMl.unitQuaternion().conjugate()), ctl(s.cMl.translation()), W(s.sqrtInformation)
+  {
+  }
+  template <typename T> bool operator()(const T *xl, const T *xk, T *residual) const
+  {
+    if (!sim3ParametersValid(xl) || !sim3ParametersValid(xk)) {
+      return false;
+    }
+    const Sim3<T> S = Akw.cast<T>() * sim3FromParameters(xk) * sim3FromParameters(xl).inverse();
+    const Eigen::Quaternion<T> dq = lRc.cast<T>() * S.unitQuaternion();
+    Eigen::Matrix<T, 6, 1> e;
+    e.template head<3>() = so3LogQuaternion<T>(dq);
+    e.template tail<3>() = S.translation() / S.scale() - ctl.cast<T>();
+    Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual);
+    r = W.cast<T>() * e;
+    return true;
+  }
+  Sim3d Akw;
+  Eigen::Quaterniond lRc; //!< the measured rotation, inverted
+  Eigen::Vector3d ctl;
+  Eigen::Matrix<double, 6, 6> W;
+};
 } // namespace
 
 void PoseGraph::addVertex(int id, const Sim3d &Siw, bool fixed)
@@ -56,6 +81,17 @@ void PoseGraph::addEdge(const PoseGraphEdge &edge)
                                                                   " joins unknown or identical vertices");
   }
   m_edges.push_back(edge);
+}
+
+void PoseGraph::addSighting(const PoseGraphSighting &sighting)
+{
+  if (!m_vertices.count(sighting.landmark) || !m_vertices.count(sighting.keyframe) ||
+      sighting.landmark == sighting.keyframe) {
+    throw vpHSlamException(vpHSlamException::invalidArgument,
+                           "PoseGraph: sighting " + std::to_string(sighting.landmark) + "-" +
+                               std::to_string(sighting.keyframe) + " joins unknown or identical vertices");
+  }
+  m_sightings.push_back(sighting);
 }
 
 void PoseGraph::addEdgeFromCurrent(int i, int j, double weight)
@@ -84,13 +120,13 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
 {
   const size_t free = static_cast<size_t>(
       std::count_if(m_vertices.begin(), m_vertices.end(), [](const auto &v) { return !v.second.fixed; }));
-  if (solver == Solver::sparse ||
-      (solver == Solver::automatic && (free >= kSparseSolverVertices || m_edges.size() >= kSparseSolverEdges))) {
+  const bool large = free >= kSparseSolverVertices || m_edges.size() >= kSparseSolverEdges;
+  if (m_sightings.empty() && (solver == Solver::sparse || (solver == Solver::automatic && large))) {
     return optimizeSparse(maxIterations);
   }
   const auto t0 = std::chrono::steady_clock::now();
   PoseGraphSummary out;
-  if (m_edges.empty()) {
+  if (m_edges.empty() && m_sightings.empty()) {
     out.usable = true;
     return out;
   }
@@ -107,6 +143,18 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
         new ceres::AutoDiffCostFunction<RelativeSim3Error, 7, kVertexParameters, kVertexParameters>(
             new RelativeSim3Error(e)),
         nullptr, m_vertices[e.i].x.data(), m_vertices[e.j].x.data());
+  }
+  for (const PoseGraphSighting &s : m_sightings) {
+    ceres::LossFunction *loss = nullptr;
+    if (s.robustScale > 0.) {
+      loss = new ceres::ScaledLoss(new ceres::CauchyLoss(s.robustScale), s.weight * s.weight, ceres::TAKE_OWNERSHIP);
+    } else if (s.weight != 1.) {
+      loss = new ceres::ScaledLoss(nullptr, s.weight * s.weight, ceres::TAKE_OWNERSHIP);
+    }
+    problem.AddResidualBlock(
+        new ceres::AutoDiffCostFunction<MetricSightingError, 6, kVertexParameters, kVertexParameters>(
+            new MetricSightingError(s)),
+        loss, m_vertices[s.landmark].x.data(), m_vertices[s.keyframe].x.data());
   }
   for (auto &entry : m_vertices) {
     double *x = entry.second.x.data();

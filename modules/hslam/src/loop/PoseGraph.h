@@ -15,6 +15,15 @@
   kSparseSolverVertices free vertices and kSparseSolverEdges edges, by loop/SparsePoseGraphSolver.h (analytic
   Jacobians, block-sparse normal equations) from there on.
 
+  Metric sightings (addSighting()): a keyframe's measured pose relative to a landmark (an AprilTag) in metres. The
+  landmark's vertex S_lw maps the world to the landmark's frame in metres; S = A S_kw S_lw^-1 (A: a fixed factor, the
+  identity but for keyframes moved as one block) maps the landmark's frame into the keyframe's camera in the
+  keyframe's own unit, so S = (R, t, 1/lambda) with lambda the metres per unit there. The residual compares what that
+  predicts in metres with the measurement: log(cRl_measured^T R) and t / scale(S) - ctl_measured, whatever the
+  keyframe's scale: a landmark seen again after the map's scale drifted pulls the drifted keyframes back to the metres
+  of the first sightings, as a loop pulls them back to the place. Ceres only (the sparse solver has no such edge):
+  graphs with sightings are solved by Ceres whatever their size.
+
   Why two: at 10,000 keyframes Ceres takes 5.1 s and the sparse solver 0.7 s (loop benchmark). On the loops of the
   synthetic and real runs the two reach the same cost to the digits printed, but a run that continues after a
   correction diverges chaotically from any difference in the last digits (which loops it finds next, which frame
@@ -45,6 +54,20 @@ struct PoseGraphEdge {
   Eigen::Matrix<double, 7, 7> sqrtInformation = Eigen::Matrix<double, 7, 7>::Identity(); //!< residual weight
 };
 
+//! A metric sighting of a landmark from a keyframe (file comment).
+struct PoseGraphSighting {
+  int landmark = -1; //!< vertex S_lw: world to the landmark's frame, metres
+  int keyframe = -1; //!< vertex S_kw (or the block the keyframe moves with, see Akw)
+  Sim3d Akw;         //!< fixed left factor: the keyframe's S_kw is Akw times the vertex (identity for its own vertex)
+  SE3d cMl;          //!< measured: landmark frame to camera, metres
+  //! Residual weight, rotation (radians) then translation (metres): the measurement's inverse standard deviations.
+  Eigen::Matrix<double, 6, 6> sqrtInformation = Eigen::Matrix<double, 6, 6>::Identity();
+  //! The whitened residual's Cauchy scale (a wrong detection, off by tens of degrees, is not followed); 0: none.
+  double robustScale = 0.;
+  //! Weight of the robust cost against the graph's edges (their information is the identity).
+  double weight = 1.;
+};
+
 //! What optimize() did.
 struct PoseGraphSummary {
   bool usable = false; //!< Ceres returned a usable solution (vertices written)
@@ -61,12 +84,15 @@ public:
   void addVertex(int id, const Sim3d &Siw, bool fixed = false);
   //! Add an edge between two vertices already added. \exception vpHSlamException::invalidArgument otherwise.
   void addEdge(const PoseGraphEdge &edge);
+  //! Add a metric sighting between two vertices already added. \exception vpHSlamException::invalidArgument otherwise.
+  void addSighting(const PoseGraphSighting &sighting);
   //! Edge from the current estimates of i and j (consecutive keyframes, co-visibility), weighted by \e weight.
   void addEdgeFromCurrent(int i, int j, double weight = 1.);
 
   //! Which solver optimize() uses.
   enum class Solver {
-    automatic, //!< Ceres below kSparseSolverVertices free vertices and kSparseSolverEdges edges, else sparse
+    automatic, //!< Ceres below kSparseSolverVertices free vertices and kSparseSolverEdges edges or with sightings,
+               //!< else sparse
     ceres,     //!< Ceres (automatic differentiation)
     sparse     //!< loop/SparsePoseGraphSolver.h
   };
@@ -85,6 +111,7 @@ public:
   Sim3d vertex(int id) const;
   size_t vertexCount() const { return m_vertices.size(); }
   size_t edgeCount() const { return m_edges.size(); }
+  size_t sightingCount() const { return m_sightings.size(); }
 
 private:
   //! [qx, qy, qz, qw, tx, ty, tz, log s] (loop/Sim3Parameters.h).
@@ -97,6 +124,7 @@ private:
 
   std::map<int, Vertex> m_vertices;
   std::vector<PoseGraphEdge> m_edges;
+  std::vector<PoseGraphSighting> m_sightings;
 };
 } // namespace hslam
 

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <set>
 
 namespace hslam
 {
@@ -286,6 +287,51 @@ unsigned int MetricFrame::sightingCount() const
 {
   std::lock_guard<std::mutex> lock(m_mutex);
   return static_cast<unsigned int>(m_sightings.size());
+}
+
+std::vector<MetricFrame::SegmentSighting> MetricFrame::segmentSightings() const
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  std::vector<SegmentSighting> out;
+  for (const Stored &s : m_sightings) {
+    if (s.segment == m_segment) {
+      out.push_back({s.keyframeId, s.tagId, s.cMt});
+    }
+  }
+  return out;
+}
+
+bool MetricFrame::seenAgain(int keyframeId) const
+{
+  std::lock_guard<std::mutex> lock(m_mutex);
+  std::map<int, std::set<int>> keyframesByTag; // the segment's sighting keyframes of each tag seen by keyframeId
+  for (const Stored &s : m_sightings) {
+    if (s.segment == m_segment && s.keyframeId == keyframeId) {
+      keyframesByTag[s.tagId];
+    }
+  }
+  for (const Stored &s : m_sightings) {
+    const auto it = keyframesByTag.find(s.tagId);
+    if (it != keyframesByTag.end() && s.segment == m_segment && s.keyframeId < keyframeId) {
+      it->second.insert(s.keyframeId);
+    }
+  }
+  for (const auto &entry : keyframesByTag) {
+    int run = 1, newer = keyframeId;
+    bool before = false; // a visit before this run
+    for (auto k = entry.second.rbegin(); k != entry.second.rend(); ++k) {
+      if (newer - *k >= kRevisitKeyframes) {
+        before = true;
+        break;
+      }
+      ++run;
+      newer = *k;
+    }
+    if (before && (run == 1 || run == 3)) {
+      return true;
+    }
+  }
+  return false;
 }
 
 void MetricFrame::clear()

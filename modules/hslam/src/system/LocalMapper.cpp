@@ -223,7 +223,7 @@ bool LocalMapper::applySolvedCorrections(bool wait)
   LoopCloser::Correction correction;
   while (m_loop && m_loop->threaded() && m_loop->takeCorrection(correction, wait)) {
     collectGlobalBundleAdjustment(false);
-    applyCorrection(correction.loop, correction.solution, std::chrono::steady_clock::now(), correction.solveMs);
+    applyCorrection(correction, std::chrono::steady_clock::now());
     applied = true;
   }
   return applied;
@@ -244,31 +244,69 @@ bool LocalMapper::correctLoop(const DetectedLoop &loop)
   // copy) until this correction is known to succeed, and is stopped only then (its keyframes move; a new one follows).
   collectGlobalBundleAdjustment(false);
   const auto t0 = std::chrono::steady_clock::now();
-  std::vector<std::pair<int, Sim3d>> solution;
+  LoopCloser::Correction correction;
+  correction.loop = loop;
   {
     CorrectingFlag correcting(m_correctingLoop);
-    if (!m_loop->correct(loop, m_keeper.globalMap(), windowPoses(), solution)) {
+    if (!m_loop->correct(loop, m_keeper.globalMap(), windowPoses(), correction.solution)) {
       return false;
     }
   }
-  applyCorrection(loop, solution, t0, 0.);
+  applyCorrection(correction, t0);
   return true;
 }
 
-void LocalMapper::applyCorrection(const DetectedLoop &loop, const std::vector<std::pair<int, Sim3d>> &solution,
-                                  std::chrono::steady_clock::time_point t0, double solvedElsewhereMs)
+void LocalMapper::setLandmarkSightings(LandmarkSightings landmarks)
+{
+  if (m_loop) {
+    m_loop->setLandmarkSightings(std::move(landmarks));
+  }
+}
+
+bool LocalMapper::correctLandmarks(int keyframe)
+{
+  if (!m_loop) {
+    return false;
+  }
+  if (m_loop->threaded()) {
+    m_loop->queueLandmarkCorrection(keyframe, m_keeper.globalMap().graphCopy(), windowPoses());
+    return false;
+  }
+  collectGlobalBundleAdjustment(false); // as before a loop's correction
+  const auto t0 = std::chrono::steady_clock::now();
+  LoopCloser::Correction correction;
+  correction.loop.keyframe = keyframe;
+  correction.landmark = true;
+  {
+    CorrectingFlag correcting(m_correctingLoop);
+    if (!m_loop->correctLandmarks(keyframe, m_keeper.globalMap(), windowPoses(), correction.solution)) {
+      return false;
+    }
+  }
+  applyCorrection(correction, t0);
+  return true;
+}
+
+void LocalMapper::applyCorrection(const LoopCloser::Correction &correction, std::chrono::steady_clock::time_point t0)
 {
   CorrectingFlag correcting(m_correctingLoop);
   m_loop->cancelBackgroundJob(); // its result would undo this correction
-  for (const auto &entry : solution) {
+  for (const auto &entry : correction.solution) {
     m_keeper.globalMap().applySimilarity(entry.first, entry.second);
     publishStoredKeyframe(entry.first, entry.second.scale());
   }
   const double ms =
-      solvedElsewhereMs + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-  m_loop->recordCorrectionApplied(ms);
-  VP_HSLAM_LOG(vpHSlamLog::info, "loop " << loop.keyframe << "-" << loop.candidate << " corrected, " << solution.size()
-                                         << " stored keyframes moved, " << ms << " ms");
+      correction.solveMs + std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  m_loop->recordCorrectionApplied(ms, correction.landmark);
+  if (correction.landmark) {
+    VP_HSLAM_LOG(vpHSlamLog::info, "landmark seen again at keyframe " << correction.loop.keyframe << ": corrected, "
+                                                                      << correction.solution.size()
+                                                                      << " stored keyframes moved, " << ms << " ms");
+  } else {
+    VP_HSLAM_LOG(vpHSlamLog::info, "loop " << correction.loop.keyframe << "-" << correction.loop.candidate
+                                           << " corrected, " << correction.solution.size()
+                                           << " stored keyframes moved, " << ms << " ms");
+  }
   startGlobalBundleAdjustment();
 }
 

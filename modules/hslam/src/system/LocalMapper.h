@@ -162,6 +162,18 @@ public:
     when something was written back (its keyframes' states are then to be taken).
   */
   bool collectGlobalBundleAdjustment(bool wait);
+  /*!
+    Landmarks seen in metres (the tag's sightings in the current segment, with the metric frame's scale): constraints
+    of every correction's pose graph from now on. Nothing without a loop closer.
+  */
+  void setLandmarkSightings(LandmarkSightings landmarks);
+  /*!
+    A landmark seen from keyframe \e keyframe (in the window) was seen before from stored keyframes: the segment is
+    corrected as after a loop, with the sightings as the measurement (deterministic: now; real time: on the loop
+    closer's thread, applied at a later keyframe). True when a correction was applied now (its keyframes' states are
+    then to be taken).
+  */
+  bool correctLandmarks(int keyframe);
 
   // ---- map files (vpHSlam::saveMap / loadMap)
   /*!
@@ -231,12 +243,11 @@ private:
   */
   bool correctLoop(const DetectedLoop &loop);
   /*!
-    Apply a solved correction: every stored keyframe of \e solution moves (pose, points), the trajectory follows,
-    a global bundle adjustment may start. \e t0: when the correction started here; \e solvedElsewhereMs: time the
-    loop closer's thread spent on it.
+    Apply a solved correction (a loop's or a landmark's): every stored keyframe of its solution moves (pose, points),
+    the trajectory follows, a global bundle adjustment may start. \e t0: when the correction started here; its
+    solveMs: time the loop closer's thread spent on it.
   */
-  void applyCorrection(const DetectedLoop &loop, const std::vector<std::pair<int, Sim3d>> &solution,
-                       std::chrono::steady_clock::time_point t0, double solvedElsewhereMs);
+  void applyCorrection(const LoopCloser::Correction &correction, std::chrono::steady_clock::time_point t0);
   //! Real time: apply the corrections the loop closer's thread solved (with \e wait, after its queued work).
   bool applySolvedCorrections(bool wait);
   //! A stored keyframe moved: report its pose (and the scale of the move) and refresh its relocalisation points.

@@ -366,6 +366,7 @@ void SlamSystem::reset()
   m_recorder.clear();
   m_runStats.clear();
   m_metricFrame.clear();
+  m_tagSightingsGiven = 0;
   m_initializer->reset();
   m_frameTracker->reset();
   if (m_localizer) {

@@ -141,7 +141,10 @@ private:
   void declareLost(bool discardSegment = false);
   //! Forgets the prepared tracking reference and empties the published map snapshot (after the map was cleared).
   void dropPreparedReferenceAndSnapshot();
-  //! Back end, after keyframe \e keyframeId was recorded: the metric frame looks for the tag in it.
+  /*!
+    Back end, after keyframe \e keyframeId was recorded: the metric frame looks for the tag in it. In slam mode, once
+    metric, the segment's sightings go to loop closure's pose graphs, and a tag seen again asks for a correction.
+  */
   void observeTags(int keyframeId, const Frame &frame);
   //! The rectified camera, as map files record it.
   MapCamera mapCamera() const;
@@ -227,6 +230,8 @@ private:
 
   // ---- metric frame (setTag()): fed by the back end, read by the output getters
   MetricFrame m_metricFrame;
+  std::atomic<unsigned int> m_tagSightingsGiven{
+      0}; //!< sightings stored when the mapper was last given them (observeTags())
 
   // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
   double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread

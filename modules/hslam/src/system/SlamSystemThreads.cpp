@@ -268,9 +268,26 @@ int SlamSystem::closestKeyframe(const SE3d &cMw, const std::vector<int> &keyfram
 void SlamSystem::observeTags(int keyframeId, const Frame &frame)
 {
   // Called with m_mapperMutex held (runJob, initialisation): the window's points may be read.
-  m_metricFrame.observeKeyframe(
-      keyframeId, m_segment, frame.raw, [this](int id, SE3d &wMc) { return m_recorder.keptKeyframePose(id, wMc); },
-      [this](std::vector<Eigen::Vector3d> &points) { m_mapper->activePointsWorld(points); });
+  const MetricFrame::PoseLookup pose = [this](int id, SE3d &wMc) { return m_recorder.keptKeyframePose(id, wMc); };
+  const MetricFrame::PointLookup points = [this](std::vector<Eigen::Vector3d> &p) { m_mapper->activePointsWorld(p); };
+  m_metricFrame.observeKeyframe(keyframeId, m_segment, frame.raw, pose, points);
+  const MetricFit fit = m_metricFrame.current();
+  const unsigned int stored = m_metricFrame.sightingCount();
+  if (!fit.metric || fit.allSegments || stored == m_tagSightingsGiven) {
+    return;
+  }
+  // The tag's sightings as metric constraints of loop closure's pose graphs (nothing without a loop closer).
+  m_tagSightingsGiven = stored;
+  LandmarkSightings landmarks;
+  landmarks.metresPerUnit = fit.scale;
+  for (const MetricFrame::SegmentSighting &s : m_metricFrame.segmentSightings()) {
+    landmarks.sightings.push_back({s.keyframeId, s.tagId, s.cMt, s.cMt.translation().norm()});
+  }
+  m_mapper->setLandmarkSightings(std::move(landmarks));
+  if (m_metricFrame.seenAgain(keyframeId) && m_mapper->correctLandmarks(keyframeId)) {
+    publishAfterKeyframe(); // the moved keyframes: trajectory, the tag's depth measurements in them
+    m_metricFrame.refit(pose, points);
+  }
 }
 
 vpHomogeneousMatrix SlamSystem::get_cMw() const
@@ -383,6 +400,7 @@ vpHSlam::Statistics SlamSystem::statistics() const
   s.loopsDetected = static_cast<unsigned int>(loops.loops.size());
   s.loopCandidatesVerified = static_cast<unsigned int>(loops.candidatesVerified);
   s.loopsCorrected = static_cast<unsigned int>(loops.applied.corrected);
+  s.tagCorrections = static_cast<unsigned int>(loops.applied.landmarkCorrected);
   s.lastLoopCorrectionMs = loops.applied.lastCorrectionMs;
   s.loopCorrectionMsMax = loops.applied.correctionMsMax;
   s.loopDetectionMsMean = loops.detections > 0 ? loops.detectionMsTotal / loops.detections : 0.;
@@ -421,6 +439,7 @@ vpHSlam::Statistics SlamSystem::statistics() const
 void SlamSystem::setTag(const vpHSlamTag &tag)
 {
   m_metricFrame.setTag(tag, m_params.tagFrame, m_preprocessor.getCameraParameters());
+  m_tagSightingsGiven = 0;
 }
 
 vpHSlamTag SlamSystem::tag() const

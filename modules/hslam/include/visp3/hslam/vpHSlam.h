@@ -174,6 +174,7 @@ public:
     bool metric = false;                //!< outputs are in metres (a tag was described and its fit is trusted)
     unsigned int tagSightings = 0;      //!< tag sightings in keyframes (setTag())
     unsigned int tagSightingsUsed = 0;  //!< of which kept by the metric fit (its segment, not refused)
+    unsigned int tagCorrections = 0;    //!< slam mode: pose-graph corrections applied because the tag was seen again
     double metricScale = 1.;            //!< metres per map unit of the fit (1 when none)
     double metricScaleUncertainty = 1.; //!< the fit's relative standard deviation of that scale (1 when none)
     double tagDetectionMsMean = 0.;     //!< tag detection per keyframe, milliseconds

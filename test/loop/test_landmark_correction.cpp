@@ -1,0 +1,140 @@
+// A landmark seen in metres (an AprilTag, issue 53) as a constraint of loop closure's pose graph: seen again after a
+// lap whose scale drifted, it bends the map back to the metres of the first visit, as a loop would bring back the
+// place (loop/LoopCorrection.h, solveLandmarkCorrection(); PoseGraph.h, metric sightings).
+#include "loop/LoopCorrection.h"
+#include "map/GlobalMap.h"
+
+#include "CircleRun.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <vector>
+
+namespace
+{
+using hslam::SE3d;
+using hslam::Sim3d;
+
+//! Two laps of 20 keyframes round a circle, the last kWindow in the window, whose odometry grows its scale by
+//! kScaleDrift per keyframe (a monocular map's scale drift), and a tag 2 m in front of the first places.
+struct DriftedLaps {
+  static constexpr int kStored = 40, kWindow = 3, kPlaces = 20;
+  static constexpr double kScaleDrift = 0.005;
+  hslam::GlobalMap map;
+  std::map<int, SE3d> window;
+  SE3d wMt; //!< the tag in the true world, metres
+
+  static SE3d truth(int k) { return hslam_test::circleCamera(k, kPlaces, 0.); } // cMw, metres
+
+  DriftedLaps()
+  {
+    wMt = truth(1).inverse() *
+          SE3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX())), Eigen::Vector3d(0.1, 0., 2.));
+    SE3d wMc = truth(0).inverse();
+    for (int k = 0; k < kStored + kWindow; ++k) {
+      if (k > 0) { // the true motion, its translation scaled by the drift so far
+        SE3d step = truth(k - 1) * truth(k).inverse();
+        step.translation() *= std::pow(1. + kScaleDrift, k);
+        wMc = wMc * step;
+        hslam::PosePoseEdge e;
+        e.from = k - 1;
+        e.to = k;
+        e.toMfrom = wMc.inverse() * pose(k - 1).inverse();
+        map.addPosePoseEdge(e);
+      }
+      if (k < kStored) {
+        hslam::GlobalKeyframe g;
+        g.id = k;
+        g.cMw = wMc.inverse();
+        map.add(g);
+      } else {
+        window[k] = wMc.inverse();
+      }
+    }
+  }
+  SE3d pose(int k) const { return window.count(k) ? window.at(k) : map.find(k)->cMw; }
+  //! Metres per map unit at the window (the metric frame's scale there).
+  static double metresPerUnit() { return std::pow(1. + kScaleDrift, -(kStored + 1)); }
+  //! The true sighting of the tag from keyframe \e k.
+  hslam::LandmarkSighting sighting(int k) const
+  {
+    const SE3d cMt = truth(k) * wMt;
+    return {k, 0, cMt, cMt.translation().norm()};
+  }
+  //! How far keyframes 0 and 1 are apart in metres by the map's unit at the window, against the truth (1: right).
+  double firstStepScale() const
+  {
+    const double map01 = (pose(0).inverse().translation() - pose(1).inverse().translation()).norm();
+    const double true01 = (truth(0).inverse().translation() - truth(1).inverse().translation()).norm();
+    return map01 * metresPerUnit() / true01;
+  }
+  //! Metres between keyframe 0 and keyframe 40, the same place (0 in the truth).
+  double closingMetres() const
+  {
+    return (pose(0).inverse().translation() - pose(kStored).inverse().translation()).norm() * metresPerUnit();
+  }
+  bool correct(const hslam::LandmarkSightings &landmarks)
+  {
+    std::vector<std::pair<int, Sim3d>> solution;
+    if (!hslam::solveLandmarkCorrection(map, 0, window, {}, landmarks, solution)) {
+      return false;
+    }
+    for (const auto &s : solution) {
+      map.applySimilarity(s.first, s.second);
+    }
+    return true;
+  }
+};
+
+hslam::LandmarkSightings seenAtBothVisits(const DriftedLaps &laps)
+{
+  hslam::LandmarkSightings landmarks;
+  landmarks.metresPerUnit = DriftedLaps::metresPerUnit();
+  for (int k : {0, 1, 2, 40, 41, 42}) {
+    landmarks.sightings.push_back(laps.sighting(k));
+  }
+  return landmarks;
+}
+} // namespace
+
+TEST(LandmarkCorrection, ATagSeenAgainUndoesTheScaleDriftOfTheLapBetween)
+{
+  DriftedLaps laps;
+  const double scaleBefore = laps.firstStepScale(), closingBefore = laps.closingMetres();
+  ASSERT_TRUE(laps.correct(seenAtBothVisits(laps)));
+  std::printf("first step's scale %.4f -> %.4f, places 0 and 40 apart by %.3f -> %.3f m\n", scaleBefore,
+              laps.firstStepScale(), closingBefore, laps.closingMetres());
+  EXPECT_LT(scaleBefore, 0.85); // the first lap was mapped about 20 % too small for the window's metres
+  EXPECT_NEAR(laps.firstStepScale(), 1., 0.03);
+  EXPECT_LT(laps.closingMetres(), 0.1 * closingBefore);
+}
+
+TEST(LandmarkCorrection, AFlippedDetectionDoesNotBendTheMap)
+{
+  // A small tag seen face-on can be detected with its pose flipped by tens of degrees: the robust cost lets it go.
+  DriftedLaps laps;
+  hslam::LandmarkSightings landmarks = seenAtBothVisits(laps);
+  hslam::LandmarkSighting flipped = laps.sighting(2);
+  flipped.cMl =
+      flipped.cMl * SE3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY())), Eigen::Vector3d::Zero());
+  landmarks.sightings[2] = flipped;
+  const double closingBefore = laps.closingMetres();
+  ASSERT_TRUE(laps.correct(landmarks));
+  EXPECT_NEAR(laps.firstStepScale(), 1., 0.03);
+  EXPECT_LT(laps.closingMetres(), 0.1 * closingBefore);
+}
+
+TEST(LandmarkCorrection, NothingToCorrectWithoutASightingFromTheWindowOrWhenNotMetric)
+{
+  DriftedLaps laps;
+  hslam::LandmarkSightings landmarks = seenAtBothVisits(laps);
+  landmarks.sightings.resize(3); // the first visit only
+  EXPECT_FALSE(laps.correct(landmarks));
+  landmarks = seenAtBothVisits(laps);
+  landmarks.metresPerUnit = 0.; // the metric frame is not trusted yet
+  EXPECT_FALSE(laps.correct(landmarks));
+  EXPECT_EQ(laps.pose(0).translation(), DriftedLaps::truth(0).translation()); // nothing moved
+}
