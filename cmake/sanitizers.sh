@@ -83,7 +83,7 @@ if setarch "$(uname -m)" -R true 2>/dev/null; then
   no_aslr=(setarch "$(uname -m)" -R)
 fi
 targets=(test_window_threads test_worker_pool test_system_synthetic test_system_inputs test_system_tutorial
-  test_faults test_system_loop test_global_bundle_adjustment tutorial-hslam-dataset)
+  test_faults test_system_loop test_global_bundle_adjustment test_landmark_correction tutorial-hslam-dataset)
 # Real-time mode (mapping thread) and the thread pool; the dataset program in real-time mode (signals during mapping);
 # the global bundle adjustment's own thread (started, replaced, cancelled).
 threaded='WindowThreads|WorkerPool|RealTime|NoFrameMeansNothingToReport|TerminationSignals|BackgroundBundleAdjustment'

@@ -9,7 +9,8 @@
 # script prints the median and range over the budgets of: the scale error and the frame's offset and rotation (the
 # Sim(3) that best aligns the final trajectory onto the truth in the tag's frame; 0 / 0 / 0 is perfect), the ATE with
 # no alignment (metres; "no tag" is not metric, so there it is in map units and only the Sim(3)-aligned ATE means
-# anything), and how many runs ended metric. Verdict per tag variant: "ok" when every run is metric and the medians
+# anything) and the Sim(3)-aligned ATE (the map's shape), how many runs ended metric, and the range of the corrections
+# the tag asked for when seen again (slam mode: the sightings bend the map, docs/metric-tag-frame.md). Verdict per tag variant: "ok" when every run is metric and the medians
 # are within the issue's bounds (1 %, 1 cm, 0.5 degree), else "NO". Then test_tag_detector's detector checks.
 # Environment: OUT (default /tmp/hslam-tag-bench), BUDGETS (default 480 490 500 510 520), MODE (default slam).
 set -uo pipefail # not -e: one failed run must not end the benchmark
@@ -49,10 +50,10 @@ for budget in $budgets; do
   done
 done
 
-printf '%-10s %-6s %-22s %-22s %-22s %-22s %-9s %s\n' variant metric "scale error %" "frame offset cm" "frame deg" \
-  "ATE no alignment m" "tag ms" verdict
+printf '%-10s %-6s %-22s %-22s %-22s %-22s %-22s %-9s %-11s %s\n' variant metric "scale error %" "frame offset cm" \
+  "frame deg" "ATE no alignment m" "ATE Sim(3)-aligned m" "tag ms" corrections verdict
 for variant in both first-lap none; do
-  scale=() offset=() deg=() ate=() ms=()
+  scale=() offset=() deg=() ate=() sim3=() ms=() corrections=()
   metric=0 runs=0
   while IFS= read -r line; do
     [[ -z "$line" ]] && continue
@@ -62,7 +63,9 @@ for variant in both first-lap none; do
     offset+=("$(awk -v x="$(field "$line" frame_offset_m)" 'BEGIN { print 100 * x }')")
     deg+=("$(field "$line" frame_deg)")
     ate+=("$(field "$line" ate_unaligned_m)")
+    sim3+=("$(field "$line" ate_sim3_m)")
     ms+=("$(field "$line" tag_ms)")
+    corrections+=("$(field "$line" tag_corrections)")
   done <<<"${lines[$variant]:-}"
   [[ $runs -eq 0 ]] && continue
   s="$(median "${scale[@]}")" o="$(median "${offset[@]}")" d="$(median "${deg[@]}")"
@@ -71,9 +74,10 @@ for variant in both first-lap none; do
     verdict="$(awk -v s="$s" -v o="$o" -v d="$d" -v m="$metric" -v r="$runs" \
       'BEGIN { print (m == r && s <= 1 && o <= 1 && d <= 0.5) ? "ok" : "NO" }')"
   fi
-  printf '%-10s %-6s %-22s %-22s %-22s %-22s %-9s %s\n' "$variant" "$metric/$runs" \
+  printf '%-10s %-6s %-22s %-22s %-22s %-22s %-22s %-9s %-11s %s\n' "$variant" "$metric/$runs" \
     "$s [$(range "${scale[@]}")]" "$o [$(range "${offset[@]}")]" "$d [$(range "${deg[@]}")]" \
-    "$(median "${ate[@]}") [$(range "${ate[@]}")]" "$(median "${ms[@]}")" "$verdict"
+    "$(median "${ate[@]}") [$(range "${ate[@]}")]" "$(median "${sim3[@]}") [$(range "${sim3[@]}")]" \
+    "$(median "${ms[@]}")" "$(range "${corrections[@]}")" "$verdict"
 done
 
 echo

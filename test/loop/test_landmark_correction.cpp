@@ -1,12 +1,16 @@
 // A landmark seen in metres (an AprilTag, issue 53) as a constraint of loop closure's pose graph: seen again after a
 // lap whose scale drifted, it bends the map back to the metres of the first visit, as a loop would bring back the
 // place (loop/LoopCorrection.h, solveLandmarkCorrection(); PoseGraph.h, metric sightings).
+#include "features/OrbVocabulary.h"
+#include "loop/LoopCloser.h"
 #include "loop/LoopCorrection.h"
 #include "map/GlobalMap.h"
 
 #include "CircleRun.h"
 
 #include <gtest/gtest.h>
+
+#include <visp3/hslam/vpHSlamParameters.h>
 
 #include <cmath>
 #include <cstdio>
@@ -123,6 +127,14 @@ TEST(LandmarkCorrection, AFlippedDetectionDoesNotBendTheMap)
   landmarks.sightings[2] = flipped;
   const double closingBefore = laps.closingMetres();
   ASSERT_TRUE(laps.correct(landmarks));
+  // Keyframe 2's orientation against its neighbour's, which the odometry had right: followed by the flipped sighting,
+  // it would turn by a good part of 40 degrees.
+  const double turnDeg = (laps.pose(2).unitQuaternion() * laps.pose(1).unitQuaternion().conjugate())
+                             .angularDistance(DriftedLaps::truth(2).unitQuaternion() *
+                                              DriftedLaps::truth(1).unitQuaternion().conjugate()) *
+                         180. / M_PI;
+  std::printf("keyframe 2 turned %.3f degree from its neighbour's true relative orientation\n", turnDeg);
+  EXPECT_LT(turnDeg, 0.5);
   EXPECT_NEAR(laps.firstStepScale(), 1., 0.03);
   EXPECT_LT(laps.closingMetres(), 0.1 * closingBefore);
 }
@@ -136,5 +148,33 @@ TEST(LandmarkCorrection, NothingToCorrectWithoutASightingFromTheWindowOrWhenNotM
   landmarks = seenAtBothVisits(laps);
   landmarks.metresPerUnit = 0.; // the metric frame is not trusted yet
   EXPECT_FALSE(laps.correct(landmarks));
-  EXPECT_EQ(laps.pose(0).translation(), DriftedLaps::truth(0).translation()); // nothing moved
+}
+
+TEST(LandmarkCorrection, RealTimeTheLoopClosersThreadSolvesItWithTheSightingsGivenBefore)
+{
+  // Real time: the sightings and the correction are queued in order to the loop closer's thread, which solves on a
+  // copy of the map; the mapper takes the solution and applies it. The solution is the one solved in the caller.
+  DriftedLaps laps;
+  std::vector<std::pair<int, Sim3d>> expected;
+  ASSERT_TRUE(hslam::solveLandmarkCorrection(laps.map, 0, laps.window, {}, seenAtBothVisits(laps), expected));
+  const hslam::OrbVocabulary vocabulary;
+  hslam::LoopCloser closer(vpHSlamParameters().loop, hslam::PinholeIntrinsics{300., 300., 160., 120.}, vocabulary);
+  closer.startThread();
+  hslam::LoopCloser::Correction correction;
+  closer.queueLandmarkCorrection(42, laps.map.graphCopy(), laps.window); // no sightings given yet: nothing solved
+  EXPECT_FALSE(closer.takeCorrection(correction, true));
+  closer.setLandmarkSightings(seenAtBothVisits(laps));
+  closer.queueLandmarkCorrection(42, laps.map.graphCopy(), laps.window);
+  ASSERT_TRUE(closer.takeCorrection(correction, true));
+  EXPECT_TRUE(correction.landmark);
+  EXPECT_EQ(correction.loop.keyframe, 42);
+  ASSERT_EQ(correction.solution.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(correction.solution[i].first, expected[i].first);
+    EXPECT_LT((correction.solution[i].second.matrix() - expected[i].second.matrix()).norm(), 1e-9);
+  }
+  // The mapper applied it: counted as a landmark's correction, not a loop's.
+  closer.recordCorrectionApplied(correction.solveMs, true);
+  EXPECT_EQ(closer.statistics().applied.landmarkCorrected, 1);
+  EXPECT_EQ(closer.statistics().applied.corrected, 0);
 }

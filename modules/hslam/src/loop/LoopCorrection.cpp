@@ -395,6 +395,9 @@ bool solveLandmarkCorrection(const GlobalMap &map, int segment, const std::map<i
   CorrectionGraph correction(keyframes);
   addMeasuredEdges(keyframes, covisibility, constraints, correction);
   const size_t sightings = correction.addSightings(landmarks);
+  if (sightings == 0) {
+    return false;
+  }
   PoseGraph &graph = correction.graph();
   const PoseGraphSummary summary = graph.optimize(kLoopGraphIterations);
   if (!summary.usable || !correction.readSolution(solution)) {

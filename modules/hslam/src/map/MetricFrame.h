@@ -133,16 +133,16 @@ public:
   //! The current segment's sightings, oldest first.
   std::vector<SegmentSighting> segmentSightings() const;
   /*!
-    Keyframes without a sighting of a tag after which seeing it again is a revisit: about three windows, so that the
+    Keyframe ids between two sightings of a tag from which the second is a revisit: about three windows, so that the
     camera turning away for a moment is not one, and the map between the two visits has drifted (marginalised).
   */
   static constexpr int kRevisitKeyframes = 20;
   /*!
     Whether keyframe \e keyframeId sees a tag again, at the moment a correction by the tag pays: the first keyframe
-    that sees it after kRevisitKeyframes or more keyframes without, and the third in a row (three sightings of the
-    present, where one detection's error, a degree or so, would otherwise bend the map). The caller asks loop
-    closure for the correction (in slam mode). Not in a long view without a gap: tried (a correction at the 8th
-    keyframe in a row and every 5th after), the servo's 2.3 m approach to a goal 1 m in front of the tag ended 0.34
+    that sees it kRevisitKeyframes or more keyframe ids after the sighting before, and the third in a row (three
+    sightings of the present, where one detection's error, a degree or so, would otherwise bend the map). The caller
+    asks loop closure for the correction (in slam mode). Not in a long view without a gap: tried (a correction at the
+    8th keyframe in a row and every 5th after), the servo's 2.3 m approach to a goal 1 m in front of the tag ended 0.34
     degree from it instead of 0.19 (the far sightings' errors bent the map where it had not drifted).
   */
   bool seenAgain(int keyframeId) const;

@@ -230,8 +230,9 @@ private:
 
   // ---- metric frame (setTag()): fed by the back end, read by the output getters
   MetricFrame m_metricFrame;
-  std::atomic<unsigned int> m_tagSightingsGiven{
-      0}; //!< sightings stored when the mapper was last given them (observeTags())
+  //! Sightings stored when the mapper was last given them, 0 when it holds none (observeTags(), the back end's; reset()
+  //! after synchronize()).
+  unsigned int m_tagSightingsGiven = 0;
 
   // ---- CPU profile (thread CPU time, ms), logged at debug level when the system is destroyed
   double m_cpuPreprocess = 0., m_cpuInitialize = 0., m_cpuTrack = 0.; //!< tracking thread

@@ -273,7 +273,14 @@ void SlamSystem::observeTags(int keyframeId, const Frame &frame)
   m_metricFrame.observeKeyframe(keyframeId, m_segment, frame.raw, pose, points);
   const MetricFit fit = m_metricFrame.current();
   const unsigned int stored = m_metricFrame.sightingCount();
-  if (!fit.metric || fit.allSegments || stored == m_tagSightingsGiven) {
+  if (!fit.metric || fit.allSegments) { // not metric (again: a new tag, a new segment): no constraints
+    if (m_tagSightingsGiven != 0) {
+      m_mapper->setLandmarkSightings(LandmarkSightings());
+      m_tagSightingsGiven = 0;
+    }
+    return;
+  }
+  if (stored == m_tagSightingsGiven) {
     return;
   }
   // The tag's sightings as metric constraints of loop closure's pose graphs (nothing without a loop closer).
@@ -439,7 +446,6 @@ vpHSlam::Statistics SlamSystem::statistics() const
 void SlamSystem::setTag(const vpHSlamTag &tag)
 {
   m_metricFrame.setTag(tag, m_params.tagFrame, m_preprocessor.getCameraParameters());
-  m_tagSightingsGiven = 0;
 }
 
 vpHSlamTag SlamSystem::tag() const
