@@ -4,6 +4,7 @@
 #include "features/OrbVocabulary.h"
 #include "loop/LoopCloser.h"
 #include "loop/LoopCorrection.h"
+#include "loop/PoseGraph.h"
 #include "map/GlobalMap.h"
 
 #include "CircleRun.h"
@@ -177,4 +178,56 @@ TEST(LandmarkCorrection, RealTimeTheLoopClosersThreadSolvesItWithTheSightingsGiv
   closer.recordCorrectionApplied(correction.solveMs, true);
   EXPECT_EQ(closer.statistics().applied.landmarkCorrected, 1);
   EXPECT_EQ(closer.statistics().applied.corrected, 0);
+}
+
+TEST(LandmarkCorrection, TheSparseSolverReachesCeresSolutionWithSightings)
+{
+  // Large graphs are solved by the sparse solver (PoseGraph.h): with sightings it must reach the optimum Ceres
+  // reaches, a flipped sighting included (its robust cost).
+  DriftedLaps laps;
+  hslam::LandmarkSightings landmarks = seenAtBothVisits(laps);
+  landmarks.sightings[1].cMl =
+      landmarks.sightings[1].cMl *
+      SE3d(Eigen::Quaterniond(Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY())), Eigen::Vector3d(0.05, 0., 0.));
+  const auto build = [&]() {
+    hslam::PoseGraph graph;
+    for (int k = 0; k < DriftedLaps::kStored + DriftedLaps::kWindow; ++k) {
+      graph.addVertex(k, Sim3d(laps.pose(k), 1.), laps.window.count(k) > 0);
+      if (k > 0) {
+        graph.addEdgeFromCurrent(k - 1, k);
+      }
+    }
+    const double m = DriftedLaps::metresPerUnit();
+    const hslam::LandmarkSighting &newest = landmarks.sightings.back();
+    const Sim3d Skl(newest.cMl.unitQuaternion(), newest.cMl.translation() / m, 1. / m);
+    graph.addVertex(-2, Skl.inverse() * Sim3d(laps.pose(newest.keyframe), 1.), false);
+    for (const hslam::LandmarkSighting &s : landmarks.sightings) {
+      hslam::PoseGraphSighting e;
+      e.landmark = -2;
+      e.keyframe = s.keyframe;
+      e.cMl = s.cMl;
+      e.sqrtInformation.topLeftCorner<3, 3>() /= 0.026;
+      e.sqrtInformation.bottomRightCorner<3, 3>() /= 0.003 * s.range;
+      e.robustScale = 3.;
+      e.weight = 1e-2;
+      graph.addSighting(e);
+    }
+    return graph;
+  };
+  hslam::PoseGraph ceres = build(), sparse = build();
+  const hslam::PoseGraphSummary c = ceres.optimize(50, hslam::PoseGraph::Solver::ceres);
+  const hslam::PoseGraphSummary s = sparse.optimize(50, hslam::PoseGraph::Solver::sparse);
+  ASSERT_TRUE(c.usable && s.usable);
+  std::printf("cost %.6g -> %.6g (Ceres, %d iterations), %.6g -> %.6g (sparse, %d iterations)\n", c.initialCost,
+              c.finalCost, c.iterations, s.initialCost, s.finalCost, s.iterations);
+  EXPECT_NEAR(s.initialCost, c.initialCost, 1e-9 * c.initialCost);
+  EXPECT_LT(c.finalCost, 0.5 * c.initialCost); // the drift is real: the chain keeps part of its cost
+  EXPECT_NEAR(s.finalCost, c.finalCost, 1e-3 * c.finalCost);
+  for (int k = -2; k < DriftedLaps::kStored; ++k) {
+    if (k == -1) {
+      continue;
+    }
+    const Sim3d d = sparse.vertex(k) * ceres.vertex(k).inverse();
+    EXPECT_LT(d.log().norm(), 1e-4) << "vertex " << k;
+  }
 }

@@ -38,30 +38,20 @@ struct RelativeSim3Error {
   Sim3d Sji; //!< the measurement
   Eigen::Matrix<double, 7, 7> W;
 };
-//! The residual of a metric sighting (PoseGraph.h): rotation and metric translation of A S_kw S_lw^-1 against cMl.
+//! The residual of a metric sighting (PoseGraph.h), whitened.
 struct MetricSightingError {
-  explicit MetricSightingError(const PoseGraphSighting &s)
-      : Akw(s.Akw), lRc(s.cMl.unitQuaternion().conjugate()), ctl(s.cMl.translation()), W(s.sqrtInformation)
-  {
-  }
+  explicit MetricSightingError(const PoseGraphSighting &s) : sighting(s) {}
   template <typename T> bool operator()(const T *xl, const T *xk, T *residual) const
   {
     if (!sim3ParametersValid(xl) || !sim3ParametersValid(xk)) {
       return false;
     }
-    const Sim3<T> S = Akw.cast<T>() * sim3FromParameters(xk) * sim3FromParameters(xl).inverse();
-    const Eigen::Quaternion<T> dq = lRc.cast<T>() * S.unitQuaternion();
-    Eigen::Matrix<T, 6, 1> e;
-    e.template head<3>() = so3LogQuaternion<T>(dq);
-    e.template tail<3>() = S.translation() / S.scale() - ctl.cast<T>();
     Eigen::Map<Eigen::Matrix<T, 6, 1>> r(residual);
-    r = W.cast<T>() * e;
+    r = sighting.sqrtInformation.cast<T>() *
+        metricSightingError<T>(sighting, sim3FromParameters(xl), sim3FromParameters(xk));
     return true;
   }
-  Sim3d Akw;
-  Eigen::Quaterniond lRc; //!< the measured rotation, inverted
-  Eigen::Vector3d ctl;
-  Eigen::Matrix<double, 6, 6> W;
+  PoseGraphSighting sighting;
 };
 } // namespace
 
@@ -120,8 +110,8 @@ PoseGraphSummary PoseGraph::optimize(int maxIterations, Solver solver)
 {
   const size_t free = static_cast<size_t>(
       std::count_if(m_vertices.begin(), m_vertices.end(), [](const auto &v) { return !v.second.fixed; }));
-  const bool large = free >= kSparseSolverVertices || m_edges.size() >= kSparseSolverEdges;
-  if (m_sightings.empty() && (solver == Solver::sparse || (solver == Solver::automatic && large))) {
+  if (solver == Solver::sparse ||
+      (solver == Solver::automatic && (free >= kSparseSolverVertices || m_edges.size() >= kSparseSolverEdges))) {
     return optimizeSparse(maxIterations);
   }
   const auto t0 = std::chrono::steady_clock::now();
@@ -195,11 +185,14 @@ PoseGraphSummary PoseGraph::optimizeSparse(int maxIterations)
     S.push_back(sim3FromParameters(entry.second.x.data()));
     fixed.push_back(entry.second.fixed);
   }
-  std::vector<std::pair<size_t, size_t>> ends;
+  std::vector<std::pair<size_t, size_t>> ends, sightingEnds;
   for (const PoseGraphEdge &e : m_edges) {
     ends.emplace_back(position[e.i], position[e.j]);
   }
-  PoseGraphSummary out = solveSparsePoseGraph(S, fixed, m_edges, ends, maxIterations);
+  for (const PoseGraphSighting &s : m_sightings) {
+    sightingEnds.emplace_back(position[s.landmark], position[s.keyframe]);
+  }
+  PoseGraphSummary out = solveSparsePoseGraph(S, fixed, m_edges, ends, maxIterations, m_sightings, sightingEnds);
   if (out.usable) {
     for (auto &entry : m_vertices) {
       sim3ToParameters(S[position[entry.first]], entry.second.x.data());

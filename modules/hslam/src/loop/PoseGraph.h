@@ -21,8 +21,8 @@
   keyframe's own unit, so S = (R, t, 1/lambda) with lambda the metres per unit there. The residual compares what that
   predicts in metres with the measurement: log(cRl_measured^T R) and t / scale(S) - ctl_measured, whatever the
   keyframe's scale: a landmark seen again after the map's scale drifted pulls the drifted keyframes back to the metres
-  of the first sightings, as a loop pulls them back to the place. Ceres only (the sparse solver has no such edge):
-  graphs with sightings are solved by Ceres whatever their size.
+  of the first sightings, as a loop pulls them back to the place. Both solvers take them (the sparse one with
+  central-difference Jacobians and the Cauchy cost as iteratively reweighted least squares).
 
   Why two: at 10,000 keyframes Ceres takes 5.1 s and the sparse solver 0.7 s (loop benchmark). On the loops of the
   synthetic and real runs the two reach the same cost to the digits printed, but a run that continues after a
@@ -68,6 +68,22 @@ struct PoseGraphSighting {
   double weight = 1.;
 };
 
+/*!
+  The unweighted error of a metric sighting at the landmark's vertex \e Slw and the keyframe's \e Skw (the file
+  comment): rotation vector of lRc_measured R(S), then t(S) / scale(S) - ctl_measured, S = Akw Skw Slw^-1. Templated
+  for Ceres' automatic differentiation; the sparse solver evaluates it in double.
+*/
+template <typename T>
+Eigen::Matrix<T, 6, 1> metricSightingError(const PoseGraphSighting &s, const Sim3<T> &Slw, const Sim3<T> &Skw)
+{
+  const Sim3<T> S = s.Akw.template cast<T>() * Skw * Slw.inverse();
+  const Eigen::Quaternion<T> lRc = s.cMl.unitQuaternion().conjugate().template cast<T>();
+  Eigen::Matrix<T, 6, 1> e;
+  e.template head<3>() = so3LogQuaternion<T>(lRc * S.unitQuaternion());
+  e.template tail<3>() = S.translation() / S.scale() - s.cMl.translation().template cast<T>();
+  return e;
+}
+
 //! What optimize() did.
 struct PoseGraphSummary {
   bool usable = false; //!< Ceres returned a usable solution (vertices written)
@@ -91,8 +107,7 @@ public:
 
   //! Which solver optimize() uses.
   enum class Solver {
-    automatic, //!< Ceres below kSparseSolverVertices free vertices and kSparseSolverEdges edges or with sightings,
-               //!< else sparse
+    automatic, //!< Ceres below kSparseSolverVertices free vertices and kSparseSolverEdges edges, else sparse
     ceres,     //!< Ceres (automatic differentiation)
     sparse     //!< loop/SparsePoseGraphSolver.h
   };

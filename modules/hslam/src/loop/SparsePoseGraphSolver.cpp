@@ -20,6 +20,8 @@ namespace
 {
 using Mat7 = Eigen::Matrix<double, 7, 7>;
 using Vec7 = Eigen::Matrix<double, 7, 1>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat67 = Eigen::Matrix<double, 6, 7>;
 
 /*!
   Levenberg-Marquardt settings: Ceres' defaults, which PoseGraph's Ceres path runs with (trust region 1e4, i.e.
@@ -157,9 +159,13 @@ class LevenbergMarquardt
 {
 public:
   LevenbergMarquardt(std::vector<Sim3d> &S, const std::vector<bool> &fixed, const std::vector<PoseGraphEdge> &edges,
-                     const std::vector<std::pair<size_t, size_t>> &ends)
-      : m_S(S), m_edges(edges), m_ends(ends)
+                     const std::vector<std::pair<size_t, size_t>> &ends,
+                     const std::vector<PoseGraphSighting> &sightings,
+                     const std::vector<std::pair<size_t, size_t>> &sightingEnds)
+      : m_S(S), m_edges(edges), m_ends(ends), m_sightings(sightings), m_sightingEnds(sightingEnds)
   {
+    m_allEnds = ends;
+    m_allEnds.insert(m_allEnds.end(), sightingEnds.begin(), sightingEnds.end());
     for (bool f : fixed) {
       m_free.push_back(f ? -1 : m_freeCount++);
     }
@@ -171,11 +177,11 @@ public:
     double current = cost(m_S);
     out.initialCost = out.finalCost = current;
     out.usable = std::isfinite(current);
-    if (m_edges.empty() || m_freeCount == 0 || !out.usable) {
+    if (m_allEnds.empty() || m_freeCount == 0 || !out.usable) {
       return out;
     }
-    orderForFillIn(m_freeCount, m_ends, m_free);
-    NormalEquations normal(m_freeCount, normalBlocks(m_freeCount, m_free, m_ends, m_offDiagonalBlock));
+    orderForFillIn(m_freeCount, m_allEnds, m_free);
+    NormalEquations normal(m_freeCount, normalBlocks(m_freeCount, m_free, m_allEnds, m_offDiagonalBlock));
     Cholesky cholesky;
     cholesky.analyzePattern(normal.H);
     Eigen::VectorXd gradient(7 * m_freeCount);
@@ -252,7 +258,7 @@ private:
     return cost(candidate);
   }
 
-  //! 0.5 sum |W log(S_ji Si Sj^-1)|^2 at \e S; infinity when not finite.
+  //! 0.5 sum |W log(S_ji Si Sj^-1)|^2 and the sightings' robust costs at \e S; infinity when not finite.
   double cost(const std::vector<Sim3d> &S) const
   {
     double sum = 0.;
@@ -260,7 +266,56 @@ private:
       sum +=
           (m_edges[k].sqrtInformation * edgeError(m_edges[k], S[m_ends[k].first], S[m_ends[k].second])).squaredNorm();
     }
+    for (size_t k = 0; k < m_sightings.size(); ++k) {
+      const PoseGraphSighting &o = m_sightings[k];
+      const double r2 = sightingResidual(o, S[m_sightingEnds[k].first], S[m_sightingEnds[k].second]).squaredNorm();
+      const double c2 = o.robustScale * o.robustScale;
+      sum += o.weight * o.weight * (o.robustScale > 0. ? c2 * std::log1p(r2 / c2) : r2);
+    }
     return std::isfinite(sum) ? 0.5 * sum : std::numeric_limits<double>::infinity();
+  }
+
+  //! A sighting's whitened residual at the landmark's \e Sl and the keyframe's \e Sk.
+  static Vec6 sightingResidual(const PoseGraphSighting &o, const Sim3d &Sl, const Sim3d &Sk)
+  {
+    return o.sqrtInformation * metricSightingError<double>(o, Sl, Sk);
+  }
+
+  /*!
+    Linearises sighting \e k into \e normal and \e gradient: central differences under left updates (a few tens of
+    sightings at most, 28 evaluations each), the Cauchy cost as iteratively reweighted least squares (weight
+    weight^2 / (1 + |r|^2 / c^2), Ceres' first-order correction left out).
+  */
+  void linearizeSighting(size_t k, NormalEquations &normal, Eigen::VectorXd &gradient) const
+  {
+    const PoseGraphSighting &o = m_sightings[k];
+    const size_t l = m_sightingEnds[k].first, v = m_sightingEnds[k].second;
+    const int fl = m_free[l], fv = m_free[v];
+    if (fl < 0 && fv < 0) {
+      return;
+    }
+    const Vec6 r = sightingResidual(o, m_S[l], m_S[v]);
+    const double c2 = o.robustScale * o.robustScale;
+    const double w = o.weight * o.weight / (o.robustScale > 0. ? 1. + r.squaredNorm() / c2 : 1.);
+    constexpr double h = 1e-6;
+    Mat67 Jl, Jv;
+    for (int d = 0; d < 7; ++d) {
+      const Sim3d plus = Sim3d::exp(Vec7::Unit(d) * h), minus = Sim3d::exp(Vec7::Unit(d) * -h);
+      Jl.col(d) = (sightingResidual(o, plus * m_S[l], m_S[v]) - sightingResidual(o, minus * m_S[l], m_S[v])) / (2. * h);
+      Jv.col(d) = (sightingResidual(o, m_S[l], plus * m_S[v]) - sightingResidual(o, m_S[l], minus * m_S[v])) / (2. * h);
+    }
+    if (fl >= 0) {
+      normal.add(fl, w * Jl.transpose() * Jl);
+      gradient.segment<7>(7 * fl) += w * Jl.transpose() * r;
+    }
+    if (fv >= 0) {
+      normal.add(fv, w * Jv.transpose() * Jv);
+      gradient.segment<7>(7 * fv) += w * Jv.transpose() * r;
+    }
+    const int block = m_offDiagonalBlock[m_edges.size() + k];
+    if (block >= 0) { // above the diagonal: the lower free index is the block's row
+      normal.add(block, fl < fv ? Mat7(w * Jl.transpose() * Jv) : Mat7(w * Jv.transpose() * Jl));
+    }
   }
 
   //! False when \e step would take a scale beyond e^+-kMaxAbsLogScale (no similarity a map can have): refused.
@@ -318,22 +373,30 @@ private:
         normal.add(m_offDiagonalBlock[k], fi < fj ? Mat7(Ji.transpose() * Jj) : Mat7(Jj.transpose() * Ji));
       }
     }
+    for (size_t k = 0; k < m_sightings.size(); ++k) {
+      linearizeSighting(k, normal, gradient);
+    }
   }
 
   std::vector<Sim3d> &m_S;
   const std::vector<PoseGraphEdge> &m_edges;
   const std::vector<std::pair<size_t, size_t>> &m_ends; //!< per edge, positions of i and j in m_S
-  std::vector<int> m_free;                              //!< per vertex, its index among the free ones, or -1
+  const std::vector<PoseGraphSighting> &m_sightings;
+  const std::vector<std::pair<size_t, size_t>> &m_sightingEnds; //!< per sighting, positions of its landmark, keyframe
+  std::vector<std::pair<size_t, size_t>> m_allEnds;             //!< the edges' ends, then the sightings'
+  std::vector<int> m_free;                                      //!< per vertex, its index among the free ones, or -1
   int m_freeCount = 0;
-  std::vector<int> m_offDiagonalBlock; //!< per edge, its off-diagonal block, or -1 (an end is fixed)
+  std::vector<int> m_offDiagonalBlock; //!< per edge then sighting, its off-diagonal block, or -1 (an end is fixed)
 };
 } // namespace
 
 PoseGraphSummary solveSparsePoseGraph(std::vector<Sim3d> &S, const std::vector<bool> &fixed,
                                       const std::vector<PoseGraphEdge> &edges,
-                                      const std::vector<std::pair<size_t, size_t>> &ends, int maxIterations)
+                                      const std::vector<std::pair<size_t, size_t>> &ends, int maxIterations,
+                                      const std::vector<PoseGraphSighting> &sightings,
+                                      const std::vector<std::pair<size_t, size_t>> &sightingEnds)
 {
-  PoseGraphSummary out = LevenbergMarquardt(S, fixed, edges, ends).run(maxIterations);
+  PoseGraphSummary out = LevenbergMarquardt(S, fixed, edges, ends, sightings, sightingEnds).run(maxIterations);
   out.usable = out.usable && std::all_of(S.begin(), S.end(), [](const Sim3d &x) {
                  return x.translation().allFinite() && x.unitQuaternion().coeffs().allFinite();
                });

@@ -29,11 +29,14 @@ namespace hslam
   Minimise 0.5 sum |W (log(S_ji Si Sj^-1))|^2 over the vertices \e S whose \e fixed flag is false, for at most
   \e maxIterations steps (accepted or not). \e ends gives, per edge, the positions of its i and j in \e S. \e S is
   updated in place; the summary's usable is false when the start or the result is not finite (ms is left to the
-  caller).
+  caller). \e sightings (PoseGraph.h) join the landmark and keyframe vertices at \e sightingEnds; their robust
+  cost is 0.5 weight^2 c^2 log(1 + |r|^2 / c^2), as Ceres' scaled Cauchy loss.
 */
 PoseGraphSummary solveSparsePoseGraph(std::vector<Sim3d> &S, const std::vector<bool> &fixed,
                                       const std::vector<PoseGraphEdge> &edges,
-                                      const std::vector<std::pair<size_t, size_t>> &ends, int maxIterations);
+                                      const std::vector<std::pair<size_t, size_t>> &ends, int maxIterations,
+                                      const std::vector<PoseGraphSighting> &sightings = {},
+                                      const std::vector<std::pair<size_t, size_t>> &sightingEnds = {});
 } // namespace hslam
 
 #endif
