@@ -120,15 +120,14 @@ bool LoopCloser::process(Work &work, Correction &correction)
   if (work.correctionsApplied != solved) {
     return false;
   }
-  const auto t0 = std::chrono::steady_clock::now();
-  bool ok = false;
-  if (work.kind == Work::landmarkCorrection) {
+  correction.landmark = work.kind == Work::landmarkCorrection;
+  if (correction.landmark) {
     correction.loop.keyframe = work.id;
-    correction.landmark = true;
-    ok = correctLandmarks(work.id, work.graph, work.windowPoses, correction.solution);
-  } else if (detect(work.graph, work.connected, correction.loop)) {
-    ok = correct(correction.loop, work.graph, work.windowPoses, correction.solution);
+  } else if (!detect(work.graph, work.connected, correction.loop)) {
+    return false;
   }
+  const auto t0 = std::chrono::steady_clock::now();
+  const bool ok = solve(correction, work.graph, work.windowPoses);
   correction.solveMs = msSince(t0);
   return ok;
 }
@@ -381,6 +380,12 @@ void LoopCloser::setLandmarkSightings(LandmarkSightings landmarks)
   work.kind = Work::newSightings;
   work.landmarks = std::move(landmarks);
   enqueue(std::move(work));
+}
+
+bool LoopCloser::solve(Correction &correction, const GlobalMap &map, const std::map<int, SE3d> &windowPoses)
+{
+  return correction.landmark ? correctLandmarks(correction.loop.keyframe, map, windowPoses, correction.solution)
+                             : correct(correction.loop, map, windowPoses, correction.solution);
 }
 
 bool LoopCloser::correctLandmarks(int keyframe, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,

@@ -185,6 +185,9 @@ public:
   */
   bool correctLandmarks(int keyframe, const GlobalMap &map, const std::map<int, SE3d> &windowPoses,
                         std::vector<std::pair<int, Sim3d>> &solution);
+  //! The pose graph \e correction asks for (a landmark's, correctLandmarks(), or its loop's, correct()) into its
+  //! solution.
+  bool solve(Correction &correction, const GlobalMap &map, const std::map<int, SE3d> &windowPoses);
   //! Threaded: correctLandmarks() on \e graph (GlobalMap::graphCopy()); the mapper collects it (takeCorrection()).
   void queueLandmarkCorrection(int keyframe, GlobalMap graph, std::map<int, SE3d> windowPoses);
   /*!

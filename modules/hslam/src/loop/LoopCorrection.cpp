@@ -181,11 +181,7 @@ public:
     }
     if (m_keyframes.inPast(e.i)) {
       e.Sji = e.Sji * Sim3d(m_keyframes.pose(e.i), 1.);
-      e.i = kPastVertex;
-      if (!m_pastInGraph) {
-        m_graph.addVertex(kPastVertex, Sim3d(), false);
-        m_pastInGraph = true;
-      }
+      e.i = pastVertex();
     }
     m_graph.addEdge(e);
   }
@@ -226,11 +222,7 @@ public:
       e.keyframe = s.keyframe;
       if (m_keyframes.inPast(s.keyframe)) { // moves with the past: S_kw = S_kw0 T^-1
         e.Akw = Sim3d(m_keyframes.pose(s.keyframe), 1.);
-        e.keyframe = kPastVertex;
-        if (!m_pastInGraph) {
-          m_graph.addVertex(kPastVertex, Sim3d(), false);
-          m_pastInGraph = true;
-        }
+        e.keyframe = pastVertex();
       }
       e.cMl = s.cMl;
       e.sqrtInformation.setIdentity();
@@ -267,6 +259,16 @@ public:
   }
 
 private:
+  //! The past's vertex, added with the first edge or sighting that reaches it.
+  int pastVertex()
+  {
+    if (!m_pastInGraph) {
+      m_graph.addVertex(kPastVertex, Sim3d(), false);
+      m_pastInGraph = true;
+    }
+    return kPastVertex;
+  }
+
   const SegmentKeyframes &m_keyframes;
   const std::vector<int> m_stored; //!< the segment's stored keyframes outside the window, in increasing id
   size_t m_pastKeyframes = 0;

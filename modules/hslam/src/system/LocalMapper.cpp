@@ -240,20 +240,9 @@ std::map<int, SE3d> LocalMapper::windowPoses() const
 
 bool LocalMapper::correctLoop(const DetectedLoop &loop)
 {
-  // A global bundle adjustment of an earlier loop: written back if it has ended; else it goes on (it works on its own
-  // copy) until this correction is known to succeed, and is stopped only then (its keyframes move; a new one follows).
-  collectGlobalBundleAdjustment(false);
-  const auto t0 = std::chrono::steady_clock::now();
   LoopCloser::Correction correction;
   correction.loop = loop;
-  {
-    CorrectingFlag correcting(m_correctingLoop);
-    if (!m_loop->correct(loop, m_keeper.globalMap(), windowPoses(), correction.solution)) {
-      return false;
-    }
-  }
-  applyCorrection(correction, t0);
-  return true;
+  return solveAndApply(correction);
 }
 
 void LocalMapper::setLandmarkSightings(LandmarkSightings landmarks)
@@ -272,14 +261,22 @@ bool LocalMapper::correctLandmarks(int keyframe)
     m_loop->queueLandmarkCorrection(keyframe, m_keeper.globalMap().graphCopy(), windowPoses());
     return false;
   }
-  collectGlobalBundleAdjustment(false); // as before a loop's correction
-  const auto t0 = std::chrono::steady_clock::now();
   LoopCloser::Correction correction;
   correction.loop.keyframe = keyframe;
   correction.landmark = true;
+  return solveAndApply(correction);
+}
+
+bool LocalMapper::solveAndApply(LoopCloser::Correction &correction)
+{
+  // A global bundle adjustment of an earlier correction: written back if it has ended; else it goes on (it works on
+  // its own copy) until this correction is known to succeed, and is stopped only then (its keyframes move; a new one
+  // follows).
+  collectGlobalBundleAdjustment(false);
+  const auto t0 = std::chrono::steady_clock::now();
   {
     CorrectingFlag correcting(m_correctingLoop);
-    if (!m_loop->correctLandmarks(keyframe, m_keeper.globalMap(), windowPoses(), correction.solution)) {
+    if (!m_loop->solve(correction, m_keeper.globalMap(), windowPoses())) {
       return false;
     }
   }

@@ -242,6 +242,8 @@ private:
     relocalisation index and the reported trajectory. Returns false when the optimisation failed (nothing changed).
   */
   bool correctLoop(const DetectedLoop &loop);
+  //! Deterministic: solve \e correction (a loop's or a landmark's) in this thread and apply it; false when it failed.
+  bool solveAndApply(LoopCloser::Correction &correction);
   /*!
     Apply a solved correction (a loop's or a landmark's): every stored keyframe of its solution moves (pose, points),
     the trajectory follows, a global bundle adjustment may start. \e t0: when the correction started here; its
